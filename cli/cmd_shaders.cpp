@@ -1,0 +1,104 @@
+// proctex shaders list | show NAME: the shader library and each shader's parameter table.
+#include <fmt/format.h>
+
+#include <sstream>
+
+#include "cli/commands.h"
+#include "cli/output.h"
+#include "shaders/library.h"
+#include "shaders/spec.h"
+
+namespace proctex::cli {
+namespace {
+
+std::string format_default(const ParamDecl& p) {
+  const auto j = param_to_json(p, p.default_value.data());
+  if (p.type == ParamType::Color)
+    return fmt::format("({:.3g}, {:.3g}, {:.3g})", p.default_value[0], p.default_value[1], p.default_value[2]);
+  if (j.is_string()) return j.get<std::string>();
+  if (p.type == ParamType::Float) return fmt::format("{:.4g}", p.default_value[0]);
+  return j.dump();
+}
+
+std::string format_range(const ParamDecl& p) {
+  if (p.type == ParamType::Bool) return "true|false";
+  if (p.type == ParamType::Enum) {
+    std::string s;
+    for (const auto& v : p.enum_values) s += (s.empty() ? "" : "|") + v;
+    return s;
+  }
+  return fmt::format("[{:.4g}, {:.4g}]", p.min, p.max);
+}
+
+nlohmann::json param_json(const ParamDecl& p) {
+  nlohmann::json j = {{"name", p.name}, {"type", to_string(p.type)},
+                      {"default", param_to_json(p, p.default_value.data())},
+                      {"scale", to_string(p.scale)}, {"searchable", p.searchable}, {"help", p.help}};
+  if (p.type == ParamType::Enum) j["values"] = p.enum_values;
+  else if (p.type != ParamType::Bool) j["range"] = {p.min, p.max};
+  return j;
+}
+
+nlohmann::json shader_json(const ShaderDecl& d, bool with_params) {
+  nlohmann::json j = {{"name", d.name}, {"family", d.family}, {"help", d.help}, {"path", d.path},
+                      {"source_hash", d.source_hash}, {"parameter_count", d.params.size()}};
+  if (with_params) {
+    j["params"] = nlohmann::json::array();
+    for (const auto& p : d.params) j["params"].push_back(param_json(p));
+  }
+  return j;
+}
+
+void list(bool json, const std::string& family) {
+  const auto& lib = ShaderLibrary::builtin();
+  nlohmann::json out = nlohmann::json::array();
+  std::vector<std::vector<std::string>> rows = {{"name", "family", "params", "description"}};
+  for (const auto& d : lib.shaders()) {
+    if (!family.empty() && d.family != family) continue;
+    out.push_back(shader_json(d, false));
+    rows.push_back({d.name, d.family, std::to_string(d.params.size()), d.help});
+  }
+  if (json) return print_json(out);
+  print_table(rows);
+  std::printf("\n%zu shaders. 'proctex shaders show NAME' lists a shader's parameters.\n", rows.size() - 1);
+}
+
+void show(const std::string& name, bool json) {
+  const ShaderDecl& d = ShaderLibrary::builtin().get(name);
+  if (json) return print_json(shader_json(d, true));
+  std::printf("%s (%s): %s\nsource: %s\n\n", d.name.c_str(), d.family.c_str(), d.help.c_str(), d.path.c_str());
+  std::vector<std::vector<std::string>> rows = {{"parameter", "type", "default", "range", "scale", "search", "help"}};
+  for (const auto& p : d.params)
+    rows.push_back({p.name, to_string(p.type), format_default(p), format_range(p),
+                    p.discrete() || p.type == ParamType::Color ? "-" : to_string(p.scale),
+                    p.searchable ? "yes" : "fixed", p.help});
+  print_table(rows);
+  std::printf("\nexample: proctex render '%s:%s=%s' -o %s.png\n", d.name.c_str(),
+              d.params.empty() ? "" : d.params.front().name.c_str(),
+              d.params.empty() ? "" : format_default(d.params.front()).c_str(), d.name.c_str());
+}
+
+}  // namespace
+
+void add_shaders_command(CLI::App& app, GlobalOptions&) {
+  auto* cmd = app.add_subcommand("shaders", "List the shader library or show one shader's parameters");
+  cmd->require_subcommand(1);
+
+  struct Options {
+    bool json = false;
+    std::string family;
+    std::string name;
+  };
+  auto o = std::make_shared<Options>();
+  auto* ls = cmd->add_subcommand("list", "List every shader with its family and description");
+  ls->add_flag("--json", o->json, "Print JSON");
+  ls->add_option("--family", o->family, "Only this family (masonry, stone, pattern, ...)");
+  ls->callback([o] { list(o->json, o->family); });
+
+  auto* sh = cmd->add_subcommand("show", "Show a shader's parameters: type, default, range, scale, help");
+  sh->add_option("name", o->name, "Shader name (see 'proctex shaders list')")->required();
+  sh->add_flag("--json", o->json, "Print JSON");
+  sh->callback([o] { show(o->name, o->json); });
+}
+
+}  // namespace proctex::cli

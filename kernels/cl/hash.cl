@@ -1,0 +1,35 @@
+// Integer hashing: the only source of randomness in shaders. Every function takes the texture's
+// seed, so the same spec renders the same pixels and another seed gives another layout.
+
+// A well-mixed 32-bit integer hash (lowbias32 by Chris Wellons).
+uint pt_hash(uint x) {
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+
+uint pt_hash2(int x, int y, uint seed) {
+  return pt_hash((uint)x * 0x8da6b343U ^ pt_hash((uint)y * 0xd8163841U ^ pt_hash(seed)));
+}
+
+uint pt_hash3(int x, int y, int z, uint seed) {
+  return pt_hash(pt_hash2(x, y, seed) ^ ((uint)z * 0xcb1ab31fU));
+}
+
+// Uniform float in [0, 1) from the top 24 bits of a hash.
+float pt_u01(uint h) { return (float)(h >> 8) * (1.0f / 16777216.0f); }
+
+// Two independent uniforms in [0, 1) for lattice cell (x, y).
+float2 pt_rand2(int x, int y, uint seed) {
+  const uint h = pt_hash2(x, y, seed);
+  return (float2)(pt_u01(h), pt_u01(pt_hash(h ^ 0x9e3779b9U)));
+}
+
+// Uniform float in [0, 1) for lattice cell (x, y) and a channel k.
+float pt_rand(int x, int y, int k, uint seed) { return pt_u01(pt_hash3(x, y, k, seed)); }
+
+// Derives a new seed for an independent layer of the same texture (octaves, warps, channels).
+uint pt_subseed(uint seed, uint layer) { return pt_hash(seed ^ (layer * 0x68e31da4U + 0x1b56c4e9U)); }

@@ -1,0 +1,234 @@
+#include "shaders/shader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace proctex {
+namespace {
+
+struct LineError {
+  const std::string& path;
+  int line;
+  [[noreturn]] void fail(const std::string& what) const {
+    throw Error(path + ":" + std::to_string(line) + ": " + what,
+                "fix the @param/@shader declaration (format: see shaders/shader.h or docs/shaders.md)");
+  }
+};
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  const auto e = s.find_last_not_of(" \t\r");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+float parse_number(const std::string& text, const LineError& at, const char* what) {
+  const std::string t = trim(text);
+  char* end = nullptr;
+  const float v = std::strtof(t.c_str(), &end);
+  if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v))
+    at.fail(std::string("cannot read ") + what + " '" + t + "' as a number");
+  return v;
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(trim(item));
+  return out;
+}
+
+// Flags and help text that follow the default/range: `log fixed "help"`.
+void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
+  static const std::regex tail_re(R"(^\s*((?:[a-z]+\s+)*)\"(.*)\"\s*$)");
+  std::smatch m;
+  if (!std::regex_match(tail, m, tail_re)) at.fail("expected flags then a \"quoted help text\"");
+  std::stringstream flags(m[1].str());
+  std::string flag;
+  while (flags >> flag) {
+    if (flag == "log") p.scale = Scale::Log;
+    else if (flag == "linear") p.scale = Scale::Linear;
+    else if (flag == "fixed") p.searchable = false;
+    else if (flag == "search") p.searchable = true;
+    else at.fail("unknown flag '" + flag + "' (known: log, linear, fixed, search)");
+  }
+  p.help = m[2].str();
+  if (p.help.empty()) at.fail("parameter '" + p.name + "' needs a one-line help text");
+}
+
+void check_range(ParamDecl& p, const LineError& at) {
+  if (!(p.min < p.max)) at.fail("range of '" + p.name + "' must have min < max");
+  for (float v : p.default_value)
+    if (v < p.min || v > p.max) at.fail("default of '" + p.name + "' lies outside its range");
+  if (p.scale == Scale::Log && p.min <= 0.0f)
+    at.fail("log-scaled '" + p.name + "' needs a positive minimum");
+  if (p.type == ParamType::Int &&
+      (p.min != std::round(p.min) || p.max != std::round(p.max) ||
+       p.default_value[0] != std::round(p.default_value[0])))
+    at.fail("int parameter '" + p.name + "' needs integer default and range");
+}
+
+ParamDecl parse_param(const std::string& body, const LineError& at) {
+  static const std::regex head_re(R"(^\s*(\w+)\s+([A-Za-z_]\w*)\s*=\s*(.*)$)");
+  std::smatch m;
+  if (!std::regex_match(body, m, head_re)) at.fail("expected '@param TYPE NAME = DEFAULT ...'");
+  ParamDecl p;
+  p.name = m[2].str();
+  p.line = at.line;
+  const std::string type = m[1].str();
+  const std::string rest = m[3].str();
+  std::smatch r;
+  if (type == "float" || type == "int") {
+    static const std::regex re(R"(^([^\s\[]+)\s*\[([^,\]]+),([^\]]+)\](.*)$)");
+    if (!std::regex_match(rest, r, re)) at.fail("expected 'DEFAULT [MIN, MAX]' for " + type + " '" + p.name + "'");
+    p.type = type == "float" ? ParamType::Float : ParamType::Int;
+    p.default_value = {parse_number(r[1].str(), at, "default")};
+    p.min = parse_number(r[2].str(), at, "minimum");
+    p.max = parse_number(r[3].str(), at, "maximum");
+    parse_tail(r[4].str(), p, at);
+  } else if (type == "color") {
+    static const std::regex re(R"(^\(([^)]*)\)\s*(?:\[([^,\]]+),([^\]]+)\])?(.*)$)");
+    if (!std::regex_match(rest, r, re)) at.fail("expected '(R, G, B)' default for colour '" + p.name + "'");
+    p.type = ParamType::Color;
+    const auto parts = split_list(r[1].str());
+    if (parts.size() != 3) at.fail("colour '" + p.name + "' needs three components");
+    for (const auto& c : parts) p.default_value.push_back(parse_number(c, at, "colour component"));
+    if (r[2].matched) {
+      p.min = parse_number(r[2].str(), at, "minimum");
+      p.max = parse_number(r[3].str(), at, "maximum");
+    }
+    parse_tail(r[4].str(), p, at);
+  } else if (type == "bool") {
+    static const std::regex re(R"(^(true|false)\b(.*)$)");
+    if (!std::regex_match(rest, r, re)) at.fail("bool '" + p.name + "' needs default true or false");
+    p.type = ParamType::Bool;
+    p.default_value = {r[1].str() == "true" ? 1.0f : 0.0f};
+    parse_tail(r[2].str(), p, at);
+  } else if (type == "enum") {
+    static const std::regex re(R"(^(\w+)\s*\{([^}]*)\}(.*)$)");
+    if (!std::regex_match(rest, r, re)) at.fail("expected 'DEFAULT {a, b, ...}' for enum '" + p.name + "'");
+    p.type = ParamType::Enum;
+    p.enum_values = split_list(r[2].str());
+    if (p.enum_values.size() < 2) at.fail("enum '" + p.name + "' needs at least two values");
+    std::set<std::string> seen;
+    for (const auto& v : p.enum_values) {
+      if (!std::regex_match(v, std::regex(R"([A-Za-z_]\w*)"))) at.fail("enum value '" + v + "' is not an identifier");
+      if (!seen.insert(v).second) at.fail("enum value '" + v + "' repeats");
+    }
+    const auto it = std::find(p.enum_values.begin(), p.enum_values.end(), r[1].str());
+    if (it == p.enum_values.end()) at.fail("enum default '" + r[1].str() + "' is not one of its values");
+    p.default_value = {static_cast<float>(it - p.enum_values.begin())};
+    p.max = static_cast<float>(p.enum_values.size() - 1);
+    parse_tail(r[3].str(), p, at);
+  } else {
+    at.fail("unknown parameter type '" + type + "' (float, int, bool, color, enum)");
+  }
+  if (p.type != ParamType::Bool) check_range(p, at);
+  return p;
+}
+
+std::string file_stem(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  if (name.ends_with(".cl")) name.resize(name.size() - 3);
+  return name;
+}
+
+std::string parent_name(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  if (slash == std::string::npos) return "user";
+  const auto prev = path.find_last_of('/', slash - 1);
+  return path.substr(prev == std::string::npos ? 0 : prev + 1,
+                     slash - (prev == std::string::npos ? 0 : prev + 1));
+}
+
+}  // namespace
+
+const char* to_string(ParamType type) {
+  switch (type) {
+    case ParamType::Float: return "float";
+    case ParamType::Int: return "int";
+    case ParamType::Bool: return "bool";
+    case ParamType::Color: return "color";
+    case ParamType::Enum: return "enum";
+  }
+  return "?";
+}
+
+const char* to_string(Scale scale) { return scale == Scale::Log ? "log" : "linear"; }
+
+const ParamDecl* ShaderDecl::find(const std::string& param) const {
+  for (const auto& p : params)
+    if (p.name == param) return &p;
+  return nullptr;
+}
+
+std::vector<float> ShaderDecl::default_packed() const {
+  std::vector<float> packed(packed_size);
+  for (const auto& p : params)
+    std::copy(p.default_value.begin(), p.default_value.end(), packed.begin() + p.offset);
+  return packed;
+}
+
+std::string stable_hash(const std::string& text) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+ShaderDecl parse_shader(const std::string& path, const std::string& source) {
+  ShaderDecl decl;
+  decl.path = path;
+  decl.name = file_stem(path);
+  decl.family = parent_name(path);
+  decl.source = source;
+  decl.source_hash = stable_hash(source);
+  if (!std::regex_match(decl.name, std::regex(R"([a-z][a-z0-9_]*)")))
+    throw Error(path + ": shader file name must be lower_case_with_underscores.cl",
+                "rename the file");
+
+  static const std::regex shader_re(R"(^\s*//\s*@shader\s+\"(.*)\"\s*$)");
+  static const std::regex param_re(R"(^\s*//\s*@param\s+(.*)$)");
+  static const std::regex stray_re(R"(^\s*//\s*@(\w+))");
+  std::set<std::string> names;
+  std::istringstream in(source);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const LineError at{path, number};
+    std::smatch m;
+    if (std::regex_match(line, m, shader_re)) {
+      decl.help = m[1].str();
+    } else if (std::regex_match(line, m, param_re)) {
+      ParamDecl p = parse_param(m[1].str(), at);
+      if (p.name == "seed") at.fail("'seed' is reserved: every shader receives the seed argument");
+      if (!names.insert(p.name).second) at.fail("parameter '" + p.name + "' is declared twice");
+      p.offset = decl.packed_size;
+      decl.packed_size += p.width();
+      decl.params.push_back(std::move(p));
+    } else if (std::regex_search(line, m, stray_re)) {
+      at.fail("unknown declaration '@" + m[1].str() + "' (known: @shader, @param)");
+    }
+  }
+  if (decl.help.empty())
+    throw Error(path + ":1: missing '// @shader \"one-line description\"' line",
+                "every shader file starts with its @shader line");
+  if (source.find("shade(") == std::string::npos)
+    throw Error(path + ": no 'float3 shade(float2 p, float fw, uint seed, const Params P)' function",
+                "define the shade function the generated kernel calls");
+  return decl;
+}
+
+}  // namespace proctex

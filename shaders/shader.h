@@ -1,0 +1,64 @@
+#pragma once
+// A shader's declaration: what the host reads from the comment header of shaders/<family>/<name>.cl.
+//
+//   // @shader "Running-bond brick wall with mortar joints"
+//   // @param int   rows   = 8    [2, 32]              "Brick rows per texture tile"
+//   // @param float mortar = 0.06 [0.01, 0.3] log      "Mortar width, fraction of a brick's height"
+//   // @param color brick  = (0.45, 0.18, 0.12)        "Mean brick colour (linear RGB)"
+//   // @param enum  bond   = running {running, stack}  "Bond pattern"
+//   // @param bool  worn   = false fixed               "Chipped brick edges"
+//   float3 shade(float2 p, float fw, uint seed, const Params P) { ... }
+//
+// Flags after the range: `log` (log scale for search; needs min > 0), `fixed` (never searched).
+// Colours range over [0, 1] per channel unless a range is given.
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace proctex {
+
+enum class ParamType { Float, Int, Bool, Color, Enum };
+enum class Scale { Linear, Log };
+
+const char* to_string(ParamType type);
+const char* to_string(Scale scale);
+
+struct ParamDecl {
+  std::string name;
+  ParamType type = ParamType::Float;
+  std::vector<float> default_value;  // packed form: 3 floats for a colour, 1 otherwise
+  float min = 0.0f;                  // per channel for colours; index range for enums
+  float max = 1.0f;
+  Scale scale = Scale::Linear;
+  bool searchable = true;
+  std::string help;
+  std::vector<std::string> enum_values;
+  int line = 0;    // line of the declaration in the shader file
+  int offset = 0;  // first float of this parameter in the packed vector
+
+  int width() const { return type == ParamType::Color ? 3 : 1; }
+  bool discrete() const { return type == ParamType::Int || type == ParamType::Bool || type == ParamType::Enum; }
+};
+
+struct ShaderDecl {
+  std::string name;    // file name without .cl
+  std::string family;  // folder name
+  std::string help;    // the @shader line
+  std::string path;    // "shaders/<family>/<name>.cl" (or a user's file path)
+  std::string source;  // the whole file
+  std::string source_hash;  // stable hex hash of the source (catalogue staleness)
+  std::vector<ParamDecl> params;
+  int packed_size = 0;  // floats in a packed parameter vector
+
+  const ParamDecl* find(const std::string& param) const;
+  std::vector<float> default_packed() const;
+};
+
+// Parses the declaration in `source`. Throws proctex::Error naming "path:line" for malformed
+// declarations (bad type, default outside range, duplicate name, missing @shader line, ...).
+ShaderDecl parse_shader(const std::string& path, const std::string& source);
+
+// FNV-1a 64-bit of a string, as 16 hex digits: stable across runs and platforms.
+std::string stable_hash(const std::string& text);
+
+}  // namespace proctex
