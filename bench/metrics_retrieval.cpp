@@ -6,7 +6,8 @@
 // Sets:
 //   photos        ../shared/textures: each photo in a 2 x 2 grid of crops
 //   photos-9      the same photos in a 3 x 3 grid of smaller crops (harder: less texture each)
-//   grey          both photo sets with colour removed (luminance in all channels)
+//   photos-16     a 4 x 4 grid analysed at half the resolution (hardest photo set)
+//   grey          photos-9 and photos-16 with colour removed (luminance in all channels)
 //   shaders       (when built with the shader library and an OpenCL device) for every library
 //                 shader, --specs random parameter vectors, each rendered with 3 seeds: the same
 //                 spec with another seed is the same texture, another spec a different one
@@ -167,11 +168,17 @@ int main(int argc, char** argv) {
     std::vector<Item> photos9 = photo_items(shared, 3);
     report("photos (2 x 2 crops)", photos, resolution);
     report("photos-9 (3 x 3 crops)", photos9, resolution);
-    std::vector<Item> grey;
-    for (const auto* set : {&photos, &photos9})
-      for (const Item& it : *set) grey.push_back({it.texture + (set == &photos ? "" : "-9"), to_grey(it.image)});
-    // Crops of the two grids of one photo overlap: label them apart, each grid its own textures.
-    report("grey (both grids, colour removed)", grey, resolution);
+    // Harder: a 4 x 4 grid of small crops, analysed at half the resolution.
+    std::vector<Item> photos16 = photo_items(shared, 4);
+    const int half = std::max(metrics::kMinResolution, resolution / 2 / 16 * 16);
+    report("photos-16 (4 x 4 crops, resolution " + std::to_string(half) + ")", photos16, half);
+    auto grey = [](const std::vector<Item>& set) {
+      std::vector<Item> out;
+      for (const Item& it : set) out.push_back({it.texture, to_grey(it.image)});
+      return out;
+    };
+    report("grey photos-9 (colour removed)", grey(photos9), resolution);
+    report("grey photos-16 (colour removed, resolution " + std::to_string(half) + ")", grey(photos16), half);
 #ifdef PROCTEX_BENCH_SHADERS
     if (shaders) {
       std::vector<Item> rendered;
