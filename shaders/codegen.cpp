@@ -62,7 +62,8 @@ std::string unpack_and_kernel(const ShaderDecl& decl) {
   const Params P = pt_unpack(params + (size_t)s * stride);
   const uint seed = seeds[s];
   const float pixel = window.z;
-  const float sub = pixel / (float)supersample;
+  // window.w scales the footprint: 1 filters over the (sub)pixel, 0 point-samples.
+  const float sub = window.w * pixel / (float)supersample;
   float3 sum = (float3)(0.0f);
   for (int j = 0; j < supersample; ++j) {
     for (int i = 0; i < supersample; ++i) {

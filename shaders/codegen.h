@@ -14,7 +14,7 @@ inline constexpr const char* kRenderKernelName = "pt_render";
 //   0 __global const float* params   N packed parameter vectors, `stride` floats apart
 //   1 int stride
 //   2 __global const uint* seeds     one seed per sample
-//   3 float4 window                  (u0, v0, texture units per pixel, unused)
+//   3 float4 window                  (u0, v0, texture units per pixel, filter scale)
 //   4 int y_offset                   first image row of this launch (tiled renders)
 //   5 int supersample                samples per pixel along each axis
 //   6 __global float* out            RGB, [sample][row][column][3]

@@ -25,6 +25,7 @@ void check_settings(const RenderSettings& s) {
     throw UsageError("supersample must be in [1, 16], got " + std::to_string(s.supersample),
                      "use --supersample 1 to 4");
   if (!(s.extent > 0.0f)) throw UsageError("render extent must be positive", "use a positive --extent");
+  if (!(s.filter >= 0.0f)) throw UsageError("filter scale must be >= 0", "use 1 for antialiasing, 0 for none");
 }
 
 }  // namespace
@@ -80,7 +81,7 @@ std::vector<Image> Renderer::render_batch(const ShaderDecl& decl, const std::vec
         kernel.setArg(0, params_buf);
         kernel.setArg(1, static_cast<cl_int>(stride));
         kernel.setArg(2, seeds_buf);
-        kernel.setArg(3, cl_float4{{settings.origin_u, settings.origin_v, pixel, 0.0f}});
+        kernel.setArg(3, cl_float4{{settings.origin_u, settings.origin_v, pixel, settings.filter}});
         kernel.setArg(4, static_cast<cl_int>(y0));
         kernel.setArg(5, static_cast<cl_int>(settings.supersample));
         kernel.setArg(6, out);

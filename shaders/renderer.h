@@ -17,6 +17,7 @@ struct RenderSettings {
   float origin_u = 0.0f;   // texture coordinate of the top-left corner
   float origin_v = 0.0f;
   float extent = 1.0f;     // texture units spanned by the image height (width keeps square pixels)
+  float filter = 1.0f;     // scales the footprint shaders filter over; 0 = point sampling (aliases)
 };
 
 class Renderer {

@@ -1,0 +1,112 @@
+// The shader file format: declarations parse into typed parameters; malformed ones name file:line.
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "shaders/codegen.h"
+#include "shaders/shader.h"
+
+namespace proctex {
+namespace {
+
+const char* kGood = R"(// @shader "A test shader"
+// @param float size = 0.25 [0.01, 1] log "Feature size"
+// @param int   count = 4 [1, 12] "How many"
+// @param color tint = (0.5, 0.25, 1) "Tint"
+// @param enum  mode = wavy {flat, wavy, rough} "Mode"
+// @param bool  flip = true fixed "Mirror it"
+float3 shade(float2 p, float fw, uint seed, const Params P) { return P.tint; }
+)";
+
+TEST(Declaration, ParsesEveryType) {
+  const ShaderDecl d = parse_shader("shaders/test/sample.cl", kGood);
+  EXPECT_EQ(d.name, "sample");
+  EXPECT_EQ(d.family, "test");
+  EXPECT_EQ(d.help, "A test shader");
+  ASSERT_EQ(d.params.size(), 5u);
+  EXPECT_EQ(d.packed_size, 7);  // the colour packs three floats
+
+  const auto& size = d.params[0];
+  EXPECT_EQ(size.type, ParamType::Float);
+  EXPECT_EQ(size.scale, Scale::Log);
+  EXPECT_FLOAT_EQ(size.min, 0.01f);
+  EXPECT_FLOAT_EQ(size.max, 1.0f);
+  EXPECT_FLOAT_EQ(size.default_value[0], 0.25f);
+  EXPECT_TRUE(size.searchable);
+
+  EXPECT_EQ(d.params[1].type, ParamType::Int);
+  EXPECT_TRUE(d.params[1].discrete());
+  EXPECT_EQ(d.params[2].type, ParamType::Color);
+  EXPECT_EQ(d.params[2].offset, 2);
+  EXPECT_EQ(d.params[2].default_value, (std::vector<float>{0.5f, 0.25f, 1.0f}));
+  EXPECT_EQ(d.params[3].enum_values, (std::vector<std::string>{"flat", "wavy", "rough"}));
+  EXPECT_FLOAT_EQ(d.params[3].default_value[0], 1.0f);
+  EXPECT_FALSE(d.params[4].searchable);
+  EXPECT_EQ(d.default_packed(), (std::vector<float>{0.25f, 4, 0.5f, 0.25f, 1, 1, 1}));
+}
+
+TEST(Declaration, SourceHashChangesWithSource) {
+  const auto a = parse_shader("shaders/test/sample.cl", kGood);
+  const auto b = parse_shader("shaders/test/sample.cl", std::string(kGood) + "\n");
+  EXPECT_EQ(a.source_hash, parse_shader("shaders/test/sample.cl", kGood).source_hash);
+  EXPECT_NE(a.source_hash, b.source_hash);
+}
+
+TEST(Declaration, GeneratedCodeDeclaresStructEnumsAndKernel) {
+  const std::string program = generate_program(parse_shader("shaders/test/sample.cl", kGood));
+  EXPECT_NE(program.find("float3 tint;"), std::string::npos);
+  EXPECT_NE(program.find("#define MODE_ROUGH 2"), std::string::npos);
+  EXPECT_NE(program.find("#line 1 \"shaders/test/sample.cl\""), std::string::npos);
+  EXPECT_NE(program.find("__kernel void pt_render"), std::string::npos);
+}
+
+struct BadCase {
+  const char* line;
+  int line_number;
+  const char* expect;
+};
+
+class MalformedDeclaration : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(MalformedDeclaration, NamesFileAndLine) {
+  const BadCase c = GetParam();
+  const std::string source = std::string("// @shader \"x\"\n// @param float ok = 0.5 [0, 1] \"fine\"\n") + c.line +
+                             "\nfloat3 shade(float2 p, float fw, uint seed, const Params P) { return 0; }\n";
+  try {
+    parse_shader("shaders/test/bad.cl", source);
+    FAIL() << "accepted: " << c.line;
+  } catch (const Error& e) {
+    const std::string where = "shaders/test/bad.cl:" + std::to_string(c.line_number);
+    EXPECT_NE(e.message().find(where), std::string::npos) << e.message();
+    EXPECT_NE(e.message().find(c.expect), std::string::npos) << e.message();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, MalformedDeclaration,
+    ::testing::Values(BadCase{"// @param quux a = 1 [0, 2] \"h\"", 3, "unknown parameter type"},
+                      BadCase{"// @param float a = 3 [0, 2] \"h\"", 3, "outside its range"},
+                      BadCase{"// @param float a = 1 [2, 0] \"h\"", 3, "min < max"},
+                      BadCase{"// @param float a = 1 [0, 2] log \"h\"", 3, "positive minimum"},
+                      BadCase{"// @param int a = 1.5 [0, 2] \"h\"", 3, "integer"},
+                      BadCase{"// @param float a = 1 [0, 2]", 3, "help"},
+                      BadCase{"// @param float a = 1 [0, 2] sideways \"h\"", 3, "unknown flag"},
+                      BadCase{"// @param float ok = 1 [0, 2] \"h\"", 3, "declared twice"},
+                      BadCase{"// @param float seed = 1 [0, 2] \"h\"", 3, "reserved"},
+                      BadCase{"// @param color c = (1, 0) \"h\"", 3, "three components"},
+                      BadCase{"// @param enum e = z {a, b} \"h\"", 3, "not one of its values"},
+                      BadCase{"// @param enum e = a {a} \"h\"", 3, "at least two"},
+                      BadCase{"// @param bool b = maybe \"h\"", 3, "true or false"},
+                      BadCase{"// @param float a = abc [0, 2] \"h\"", 3, "as a number"},
+                      BadCase{"// @parma float a = 1 [0, 2] \"h\"", 3, "unknown declaration"}));
+
+TEST(Declaration, MissingShaderLineIsAnError) {
+  EXPECT_THROW(parse_shader("shaders/t/a.cl", "float3 shade(float2 p, float fw, uint seed, const Params P) {}"),
+               Error);
+}
+
+TEST(Declaration, MissingShadeFunctionIsAnError) {
+  EXPECT_THROW(parse_shader("shaders/t/a.cl", "// @shader \"x\"\nfloat3 other() {}"), Error);
+}
+
+}  // namespace
+}  // namespace proctex
