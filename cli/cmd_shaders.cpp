@@ -1,11 +1,15 @@
 // proctex shaders list | show NAME: the shader library and each shader's parameter table.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <sstream>
 
 #include "cli/commands.h"
 #include "cli/output.h"
+#include "core/error.h"
+#include "image/image.h"
 #include "shaders/library.h"
+#include "shaders/renderer.h"
 #include "shaders/spec.h"
 
 namespace proctex::cli {
@@ -78,9 +82,46 @@ void show(const std::string& name, bool json) {
               d.params.empty() ? "" : format_default(d.params.front()).c_str(), d.name.c_str());
 }
 
+struct SheetOptions {
+  std::string output;
+  std::string family;
+  std::vector<std::string> names;
+  int size = 192;
+  int columns = 0;
+  uint32_t seed = 0;
+};
+
+// Renders every selected shader at its defaults, one launch per shader, into a labelled grid.
+void sheet(const SheetOptions& o, const GlobalOptions& global) {
+  const auto& lib = ShaderLibrary::builtin();
+  std::vector<const ShaderDecl*> chosen;
+  if (!o.names.empty()) {
+    for (const auto& n : o.names) chosen.push_back(&lib.get(n));
+  } else {
+    for (const auto& d : lib.shaders())
+      if (o.family.empty() || d.family == o.family) chosen.push_back(&d);
+  }
+  if (chosen.empty()) throw UsageError("no shader in family '" + o.family + "'", "run 'proctex shaders list'");
+  Renderer renderer(lib);
+  RenderSettings settings;
+  settings.width = settings.height = o.size;
+  std::vector<Image> tiles;
+  std::vector<std::string> labels;
+  Progress progress("rendering", static_cast<long>(chosen.size()), global.quiet);
+  for (const auto* d : chosen) {
+    progress.update(static_cast<long>(tiles.size()), d->name);
+    tiles.push_back(std::move(renderer.render_batch(*d, {d->default_packed()}, {o.seed}, settings).front()));
+    labels.push_back(d->name);
+  }
+  progress.finish();
+  const int columns = o.columns > 0 ? o.columns : static_cast<int>(std::ceil(std::sqrt(double(tiles.size()))));
+  save_image(contact_sheet(tiles, labels, columns, o.size), o.output);
+  if (!global.quiet) std::printf("%s: %zu shaders at their defaults\n", o.output.c_str(), tiles.size());
+}
+
 }  // namespace
 
-void add_shaders_command(CLI::App& app, GlobalOptions&) {
+void add_shaders_command(CLI::App& app, GlobalOptions& global) {
   auto* cmd = app.add_subcommand("shaders", "List the shader library or show one shader's parameters");
   cmd->require_subcommand(1);
 
@@ -99,6 +140,16 @@ void add_shaders_command(CLI::App& app, GlobalOptions&) {
   sh->add_option("name", o->name, "Shader name (see 'proctex shaders list')")->required();
   sh->add_flag("--json", o->json, "Print JSON");
   sh->callback([o] { show(o->name, o->json); });
+
+  auto so = std::make_shared<SheetOptions>();
+  auto* sheet_cmd = cmd->add_subcommand("sheet", "Render shaders at their defaults into one labelled contact sheet");
+  sheet_cmd->add_option("names", so->names, "Shaders to include (default: all, or --family)");
+  sheet_cmd->add_option("-o,--output", so->output, "Output image (.png, .jpg, .exr)")->required();
+  sheet_cmd->add_option("--family", so->family, "Only this family");
+  sheet_cmd->add_option("--size", so->size, "Tile size in pixels")->capture_default_str()->check(CLI::Range(16, 2048));
+  sheet_cmd->add_option("--columns", so->columns, "Tiles per row (default: a square grid)")->check(CLI::Range(1, 64));
+  sheet_cmd->add_option("--seed", so->seed, "Seed for every tile")->capture_default_str();
+  sheet_cmd->callback([so, &global] { sheet(*so, global); });
 }
 
 }  // namespace proctex::cli

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# make bench: runs every benchmark in bench/ and leaves markdown tables in build/bench-results/
+# for docs/performance.md (copy them in with the date and the machine).
+set -euo pipefail
+build=${1:-build}
+results=$build/bench-results
+mkdir -p "$results"
+export POCL_CACHE_DIR=${POCL_CACHE_DIR:-$PWD/$build/pocl-cache}
+{
+  echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(free -g | awk '/Mem:/{print $2}') GB"
+  echo "date: $(date -u +%Y-%m-%d)"
+  echo "commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+} > "$results/machine.txt"
+cat "$results/machine.txt"
+"$build/bench/bench_render" --markdown "$results/render.md" --benchmark_min_time=0.2
+for b in "$build"/bench/bench_metrics*; do
+  [[ -x "$b" ]] || continue
+  echo "== $b"
+  "$b"
+done
+echo "bench: tables in $results/"
