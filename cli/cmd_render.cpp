@@ -50,8 +50,11 @@ void run(const RenderOptions& o, const GlobalOptions& global) {
   Renderer renderer;
   const ShaderDecl& decl = renderer.library().get(spec.shader);
   const TextureSpec full = spec_from_packed(decl, resolve(decl, spec), spec.seed);
+  Progress progress("rendering " + decl.name, 100, global.quiet);
+  settings.on_progress = [&](double done) { progress.update(static_cast<long>(done * 100)); };
   const auto start = std::chrono::steady_clock::now();
   const Image image = renderer.render(spec, settings);
+  progress.finish();
   const double render_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   save_image(image, o.output);
   if (!o.spec_out.empty()) write_text(o.spec_out, full.to_json().dump(2) + "\n");

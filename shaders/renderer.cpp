@@ -92,6 +92,8 @@ std::vector<Image> Renderer::render_batch(const ShaderDecl& decl, const std::vec
                                        images[first + i].pixel(0, y0));
         }
         rt.queue().finish();
+        if (settings.on_progress)
+          settings.on_progress((double(first) + double(count) * (y0 + rows) / settings.height) / packed.size());
       }
     }
     return 0;

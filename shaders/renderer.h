@@ -2,6 +2,7 @@
 // Renders shaders through OpenCL: many parameter vectors of one shader in one launch (what the
 // catalogue and the search need), and single specs at any size (tiled, so memory stays bounded).
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "image/image.h"
@@ -18,6 +19,8 @@ struct RenderSettings {
   float origin_v = 0.0f;
   float extent = 1.0f;     // texture units spanned by the image height (width keeps square pixels)
   float filter = 1.0f;     // scales the footprint shaders filter over; 0 = point sampling (aliases)
+  // Called after each launch with the fraction done (large renders go in several row tiles).
+  std::function<void(double)> on_progress;
 };
 
 class Renderer {
