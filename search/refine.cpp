@@ -1,0 +1,177 @@
+#include "search/refine.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <nlopt.hpp>
+
+#include "core/error.h"
+
+namespace proctex::search {
+namespace {
+
+struct Names {
+  Optimizer optimizer;
+  const char* name;
+};
+constexpr Names kNames[] = {{Optimizer::NelderMead, "neldermead"},
+                            {Optimizer::Subplex, "subplex"},
+                            {Optimizer::Bobyqa, "bobyqa"},
+                            {Optimizer::Global, "global"},
+                            {Optimizer::Gradient, "gradient"}};
+
+nlopt::algorithm algorithm_for(Optimizer o) {
+  switch (o) {
+    case Optimizer::NelderMead: return nlopt::LN_NELDERMEAD;
+    case Optimizer::Subplex: return nlopt::LN_SBPLX;
+    case Optimizer::Bobyqa: return nlopt::LN_BOBYQA;
+    case Optimizer::Global: return nlopt::GN_CRS2_LM;
+    case Optimizer::Gradient: return nlopt::LD_MMA;
+  }
+  return nlopt::LN_NELDERMEAD;
+}
+
+// Unit-space width of one value of a discrete dimension: steps smaller than this never leave the
+// current whole value, so simplex steps and finite differences use at least one bin.
+double bin_width(const Dimension& d) { return d.levels ? 1.0 / d.levels : 0.0; }
+
+struct Context {
+  Objective* objective;
+  long evaluation_cap;  // Objective::evaluations() value at which this refinement stops
+  RefineResult* result;
+  const std::vector<Dimension>* dims;
+  double fd_step;
+};
+
+// The optimizers see log(similarity): similarities are exp(-distance / scale) and so nearly flat
+// (1e-5 vs 1e-6) far from the target, while their logarithm keeps a usable slope everywhere. The
+// maximiser is the same.
+double log_similarity(double s) { return std::log(std::max(s, 1e-300)); }
+
+// NLopt callback: log similarity to maximise; for the gradient method, central differences
+// rendered in the same launch as the point itself.
+double nlopt_objective(unsigned n, const double* x, double* grad, void* data) {
+  auto& c = *static_cast<Context*>(data);
+  if (c.objective->exhausted() || c.objective->evaluations() >= c.evaluation_cap) throw nlopt::forced_stop();
+  std::vector<std::vector<double>> points = {std::vector<double>(x, x + n)};
+  std::vector<double> steps(n, 0.0);
+  if (grad) {
+    for (unsigned i = 0; i < n; ++i) {
+      steps[i] = std::max(c.fd_step, bin_width((*c.dims)[i]));
+      for (double sign : {1.0, -1.0}) {
+        auto p = points.front();
+        p[i] = std::clamp(p[i] + sign * steps[i], 0.0, 1.0);
+        points.push_back(p);
+      }
+    }
+  }
+  const auto values = c.objective->evaluate(points);
+  if (grad)
+    for (unsigned i = 0; i < n; ++i) {
+      const double span = std::clamp(x[i] + steps[i], 0.0, 1.0) - std::clamp(x[i] - steps[i], 0.0, 1.0);
+      grad[i] = span > 0 ? (log_similarity(values[1 + 2 * i]) - log_similarity(values[2 + 2 * i])) / span : 0.0;
+    }
+  if (values.front() > c.result->similarity) {
+    c.result->similarity = values.front();
+    c.result->unit = points.front();
+  }
+  return log_similarity(values.front());
+}
+
+// One NLopt run from `x`; returns when it converges, hits its evaluation cap or the budget ends.
+void run_pass(Objective& objective, const RefineOptions& options, long max_evals, RefineResult& result) {
+  const auto& dims = objective.space().dims();
+  const unsigned n = static_cast<unsigned>(dims.size());
+  nlopt::opt opt(algorithm_for(options.optimizer), n);
+  opt.set_lower_bounds(std::vector<double>(n, 0.0));
+  opt.set_upper_bounds(std::vector<double>(n, 1.0));
+  std::vector<double> steps(n);
+  for (unsigned i = 0; i < n; ++i) steps[i] = std::max(options.initial_step, 1.01 * bin_width(dims[i]));
+  if (options.optimizer != Optimizer::Global) opt.set_initial_step(steps);
+  if (options.optimizer == Optimizer::Global) opt.set_population(std::max(10u, 10 * (n + 1)));
+  opt.set_ftol_abs(options.tolerance * 0.1);  // on log similarity: a relative change of S
+  opt.set_xtol_abs(1e-4);
+  opt.set_maxeval(static_cast<int>(std::max<long>(1, max_evals)));
+  Context context{&objective, objective.evaluations() + max_evals, &result, &dims, 0.02};
+  opt.set_max_objective(nlopt_objective, &context);
+  std::vector<double> x = result.unit;
+  double f = 0.0;
+  try {
+    opt.optimize(x, f);
+  } catch (const nlopt::forced_stop&) {
+  } catch (const nlopt::roundoff_limited&) {
+  } catch (const std::invalid_argument& e) {
+    throw Error(std::string("optimizer rejected the problem: ") + e.what(), "try --optimizer neldermead");
+  }
+}
+
+// Tries the neighbouring whole values of every discrete parameter (all in one launch) and keeps
+// the best, until none improves: the simplex can stall on the plateaus of a discrete dimension.
+void polish_discrete(Objective& objective, RefineResult& result) {
+  const auto& dims = objective.space().dims();
+  for (int round = 0; round < 8 && !objective.exhausted(); ++round) {
+    std::vector<std::vector<double>> candidates;
+    for (size_t i = 0; i < dims.size(); ++i) {
+      if (!dims[i].levels) continue;
+      for (double sign : {-1.0, 1.0}) {
+        auto p = objective.space().snap(result.unit);
+        p[i] += sign * bin_width(dims[i]);
+        if (p[i] < 0.0 || p[i] > 1.0) continue;
+        candidates.push_back(p);
+      }
+    }
+    if (candidates.empty()) return;
+    const auto values = objective.evaluate(candidates);
+    const auto best = std::max_element(values.begin(), values.end()) - values.begin();
+    if (values[best] <= result.similarity) return;
+    result.similarity = values[best];
+    result.unit = candidates[best];
+  }
+}
+
+}  // namespace
+
+Optimizer parse_optimizer(const std::string& name) {
+  for (const auto& n : kNames)
+    if (name == n.name) return n.optimizer;
+  std::string known;
+  for (const auto& n : kNames) known += (known.empty() ? "" : ", ") + std::string(n.name);
+  throw UsageError("unknown optimizer '" + name + "'", "choose one of: " + known);
+}
+
+std::string to_string(Optimizer optimizer) {
+  for (const auto& n : kNames)
+    if (n.optimizer == optimizer) return n.name;
+  return "?";
+}
+
+std::vector<std::string> optimizer_names() {
+  std::vector<std::string> out;
+  for (const auto& n : kNames) out.emplace_back(n.name);
+  return out;
+}
+
+RefineResult refine(Objective& objective, std::vector<double> start, const RefineOptions& options) {
+  RefineResult result;
+  const long first_evaluation = objective.evaluations();
+  result.unit = objective.space().snap(start);
+  if (objective.space().dimensions() == 0) {
+    result.similarity = objective.evaluate(result.unit);
+    return result;
+  }
+  result.similarity = objective.evaluate(result.unit);
+  for (int pass = 0; pass <= options.max_restarts && !objective.exhausted(); ++pass) {
+    const double before = result.similarity;
+    const long used = objective.evaluations() - first_evaluation;
+    if (used >= options.max_evaluations) break;
+    run_pass(objective, options, options.max_evaluations - used, result);
+    ++result.passes;
+    // Restart from the terminal point only while a pass still gains (thesis 4.4).
+    if (result.similarity - before < options.tolerance) break;
+  }
+  polish_discrete(objective, result);
+  result.evaluations = objective.evaluations() - first_evaluation;
+  return result;
+}
+
+}  // namespace proctex::search

@@ -1,0 +1,41 @@
+#pragma once
+// Local refinement with NLopt (thesis section 4.4): from a starting point, maximise similarity in
+// the bounded unit parameter space; restart from the terminal point while it still improves; then
+// polish discrete parameters by trying their neighbouring whole values.
+#include <string>
+#include <vector>
+
+#include "search/objective.h"
+
+namespace proctex::search {
+
+enum class Optimizer {
+  NelderMead,  // LN_NELDERMEAD: the thesis's downhill simplex
+  Subplex,     // LN_SBPLX: Nelder-Mead on subspaces (default: measured better, see docs/search.md)
+  Bobyqa,      // LN_BOBYQA: quadratic models, few evaluations on smooth surfaces
+  Global,      // GN_CRS2_LM: controlled random search, for rugged surfaces
+  Gradient,    // LD_MMA with central finite differences, for "unforgiving" shaders
+};
+
+Optimizer parse_optimizer(const std::string& name);  // UsageError on an unknown name
+std::string to_string(Optimizer optimizer);
+std::vector<std::string> optimizer_names();
+
+struct RefineOptions {
+  Optimizer optimizer = Optimizer::Subplex;
+  double initial_step = 0.08;     // simplex size per unit dimension (at least one bin for discrete)
+  double tolerance = 1e-3;        // stop when a pass improves similarity by less than this
+  int max_restarts = 3;           // restarts from the terminal point
+  long max_evaluations = 400;     // renders per refinement, across restarts
+};
+
+struct RefineResult {
+  std::vector<double> unit;
+  double similarity = 0.0;
+  long evaluations = 0;
+  int passes = 0;
+};
+
+RefineResult refine(Objective& objective, std::vector<double> start, const RefineOptions& options = {});
+
+}  // namespace proctex::search
