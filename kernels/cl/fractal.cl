@@ -22,7 +22,7 @@ float pt_fbm(float2 p, float fw, int octaves, float lacunarity, float gain, uint
     const float w = pt_octave_weight(freq, fw);
     if (w <= 0.0f) {
       // Filtered octaves average to zero; count their amplitude so the scale stays the same.
-      norm += amp * (1.0f - pow(gain, (float)(octaves - i))) / (1.0f - gain + 1e-6f);
+      norm += amp * (1.0f - pt_powr(gain, (float)(octaves - i))) / (1.0f - gain + 1e-6f);
       break;
     }
     norm += amp;

@@ -44,3 +44,66 @@ float4 pt_brick_cell(float2 p, float ratio, float shift) {
   const float col = floor(x / ratio);
   return (float4)(col, row, x - col * ratio, p.y - row);
 }
+
+// Soft periodic pulse train: a unit-period pulse of the given duty whose edges are ramps of width
+// `softness` (period units), box-filtered over w. A box filtered by a box is a trapezoid, so the
+// softness and the antialiasing compose exactly; once softness + w exceeds a period the result
+// is the duty cycle (the exact average).
+float pt_soft_pulsetrain(float duty, float x, float w, float softness) {
+  return pt_filtered_pulsetrain(duty, x, fmax(w, 1e-6f) + fmax(softness, 0.0f));
+}
+
+// Filtered threshold of a smooth field v (noise) at t with softness s (v units) and footprint w
+// (v units: the field's change across one pixel).
+float pt_aa_threshold(float v, float t, float s, float w) {
+  const float h = 0.5f * fmax(s, 0.0f) + 0.5f * fmax(w, 1e-6f);
+  return smoothstep(t - h, t + h, v);
+}
+
+// Fades a detail term towards its mean once its period spans fewer than ~2 pixels:
+// returns a weight in [0, 1]; `period_pixels` = period / footprint.
+float pt_detail_weight(float period_pixels) { return clamp(period_pixels * 0.5f - 1.0f, 0.0f, 1.0f); }
+
+// Bias and gain (Perlin): bias(t, b) moves the midpoint to b; gain(t, g) adds contrast (g > 0.5).
+float pt_bias(float t, float b) { return pt_powr(clamp(t, 0.0f, 1.0f), native_log2(clamp(b, 1e-4f, 0.9999f)) * -1.0f); }
+float pt_gain(float t, float g) {
+  t = clamp(t, 0.0f, 1.0f);
+  return t < 0.5f ? 0.5f * pt_bias(2.0f * t, 1.0f - g) : 1.0f - 0.5f * pt_bias(2.0f - 2.0f * t, 1.0f - g);
+}
+
+// Rotates p by `angle` radians (counter-clockwise in x right / y up; clockwise on screen, y down).
+float2 pt_rotate(float2 p, float angle) {
+  const float c = native_cos(angle), s = native_sin(angle);
+  return (float2)(c * p.x - s * p.y, s * p.x + c * p.y);
+}
+
+// Brick bonds on top of pt_brick_cell. Returns cell index .xy and in-cell position .zw, plus the
+// cell's length in *len (row height 1). bond: 0 running (half shift), 1 stack, 2 English (stretcher
+// rows alternate with header rows of half-length bricks), 3 Flemish (stretcher + header in every row).
+float4 pt_bond_cell(float2 p, float ratio, int bond, float* len) {
+  const float row = floor(p.y);
+  const int odd = ((int)row) & 1;
+  if (bond == 1) {
+    *len = ratio;
+    return pt_brick_cell(p, ratio, 0.0f);
+  }
+  if (bond == 2) {
+    if (odd) {
+      *len = 0.5f * ratio;
+      return pt_brick_cell(p + (float2)(0.25f * ratio, 0.0f), 0.5f * ratio, 0.0f);
+    }
+    *len = ratio;
+    return pt_brick_cell(p, ratio, 0.0f);
+  }
+  if (bond == 3) {
+    const float period = 1.5f * ratio;
+    const float x = p.x + (odd ? 0.75f * ratio : 0.0f);
+    const float k = floor(x / period);
+    const float u = x - k * period;
+    const int second = u >= ratio;
+    *len = second ? 0.5f * ratio : ratio;
+    return (float4)(2.0f * k + (float)second, row, second ? u - ratio : u, p.y - row);
+  }
+  *len = ratio;
+  return pt_brick_cell(p, ratio, 0.5f);
+}

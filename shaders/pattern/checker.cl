@@ -1,5 +1,5 @@
 // @shader "Checkerboard of two colours with box-filtered edges"
-// @param int   squares = 8 [1, 64]            "Squares along each side of the texture"
+// @param int   squares = 8 [2, 64]            "Squares along each side of the texture"
 // @param color color_a = (0.8, 0.8, 0.8)      "Colour of the even squares (linear RGB)"
 // @param color color_b = (0.05, 0.05, 0.05)   "Colour of the odd squares (linear RGB)"
 
