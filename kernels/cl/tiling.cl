@@ -71,3 +71,35 @@ float4 pt_hex_cell(float2 p) {
 
 // Integer id of a hex tile from its centre (centres lie on a half-integer lattice).
 int2 pt_hex_id(float2 centre) { return (int2)((int)floor(centre.x * 2.0f + 0.5f), (int)floor(centre.y / 0.8660254f + 0.5f)); }
+
+// Axis-aligned herringbone of 2 x 1 bricks (units: the brick width). Horizontal bricks have
+// lower-left corners (k - 2m, k + 2m), vertical ones (k - 2m + 2, k + 2m - 1): staircases along
+// the diagonal, repeated every (-2, 2). Returns the brick centre .xy and p relative to it .zw;
+// *vertical tells the orientation and *id is a unique integer pair of the brick.
+float4 pt_herringbone(float2 p, int* vertical, int2* id) {
+  const int k0 = (int)floor(0.5f * (p.x + p.y));
+  const int m0 = (int)floor(0.25f * (p.y - p.x));
+  float4 best = (float4)(0.0f, 0.0f, 1e9f, 1e9f);
+  float best_d = 1e9f;
+  *vertical = 0;
+  *id = (int2)(k0, m0);
+  for (int dk = -2; dk <= 1; ++dk)
+    for (int dm = -1; dm <= 1; ++dm) {
+      const int k = k0 + dk, m = m0 + dm;
+      for (int v = 0; v <= 1; ++v) {
+        const float2 corner = v ? (float2)((float)(k - 2 * m + 2), (float)(k + 2 * m - 1))
+                                : (float2)((float)(k - 2 * m), (float)(k + 2 * m));
+        const float2 half_size = v ? (float2)(0.5f, 1.0f) : (float2)(1.0f, 0.5f);
+        const float2 c = corner + half_size;
+        const float2 d = fabs(p - c) - half_size;
+        const float outside = fmax(d.x, d.y);  // <= 0 inside
+        if (outside < best_d) {
+          best_d = outside;
+          best = (float4)(c, p - c);
+          *vertical = v;
+          *id = (int2)(k, m);
+        }
+      }
+    }
+  return best;
+}

@@ -1,17 +1,18 @@
 // @shader "Brick wall: running/stack/English/Flemish bonds, mortar joints, per-brick colour and worn edges"
 // @param int   rows         = 10   [2, 40]                     "Brick courses (rows) across the texture"
-// @param float ratio        = 2.0  [1.0, 4.0]                  "Brick length divided by brick height"
+// @param float ratio        = 2.0  [1.0, 6.0]                  "Brick length divided by brick height"
 // @param float mortar       = 0.12 [0.02, 0.4] log             "Mortar joint width, fraction of the brick height"
 // @param color brick        = (0.33, 0.11, 0.06)               "Mean brick colour (linear RGB)"
 // @param color mortar_color = (0.45, 0.43, 0.40)               "Mortar colour (linear RGB)"
 // @param float variation    = 0.35 [0, 1]                      "Brick-to-brick colour variation"
 // @param float wear         = 0.3  [0, 1]                      "Chipped, eroded brick edges"
 // @param float roughness    = 0.3  [0, 1]                      "Surface grain and stains"
+// @param bool  vertical     = false                            "Courses run vertically (wall turned 90 degrees)"
 // @param enum  bond         = running {running, stack, english, flemish} "Bond pattern"
 
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float rows = (float)P.rows;
-  const float2 q = p * rows;  // one course is 1 unit high
+  const float2 q = (P.vertical ? p.yx : p) * rows;  // one course is 1 unit high
   const float w = fw * rows;  // footprint in course units
   float len;
   const float4 c = pt_bond_cell(q, P.ratio, P.bond, &len);
