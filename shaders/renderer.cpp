@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "kernels/buffers.h"
 #include "kernels/runtime.h"
 #include "shaders/codegen.h"
 
@@ -53,7 +54,6 @@ std::vector<Image> Renderer::render_batch(const ShaderDecl& decl, const std::vec
   for (size_t i = 0; i < packed.size(); ++i) images.emplace_back(settings.width, settings.height);
   if (packed.empty()) return images;
 
-  auto& rt = ocl::Runtime::instance();
   cl::Kernel kernel = kernel_for(decl);
   const size_t stride = std::max(1, decl.packed_size);
   const size_t row_bytes = size_t(settings.width) * 3 * sizeof(float);
@@ -66,38 +66,26 @@ std::vector<Image> Renderer::render_batch(const ShaderDecl& decl, const std::vec
                              : static_cast<int>(std::clamp<size_t>(kMaxLaunchBytes / row_bytes, 1, settings.height));
   const float pixel = settings.extent / settings.height;
 
-  ocl::with_cl_errors("rendering", [&] {
-    for (size_t first = 0; first < packed.size(); first += samples_per_launch) {
-      const size_t count = std::min(samples_per_launch, packed.size() - first);
-      std::vector<float> params(count * stride, 0.0f);
-      for (size_t i = 0; i < count; ++i) std::copy(packed[first + i].begin(), packed[first + i].end(), params.begin() + i * stride);
-      cl::Buffer params_buf(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, params.size() * sizeof(float), params.data());
-      cl::Buffer seeds_buf(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * sizeof(uint32_t),
-                           const_cast<uint32_t*>(seeds.data() + first));
-      for (int y0 = 0; y0 < settings.height; y0 += rows_per_launch) {
-        const int rows = std::min(rows_per_launch, settings.height - y0);
-        const size_t out_floats = count * rows * size_t(settings.width) * 3;
-        cl::Buffer out(rt.context(), CL_MEM_WRITE_ONLY, out_floats * sizeof(float));
-        kernel.setArg(0, params_buf);
-        kernel.setArg(1, static_cast<cl_int>(stride));
-        kernel.setArg(2, seeds_buf);
-        kernel.setArg(3, cl_float4{{settings.origin_u, settings.origin_v, pixel, settings.filter}});
-        kernel.setArg(4, static_cast<cl_int>(y0));
-        kernel.setArg(5, static_cast<cl_int>(settings.supersample));
-        kernel.setArg(6, out);
-        rt.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(settings.width, rows, count));
-        for (size_t i = 0; i < count; ++i) {
-          const size_t floats = size_t(rows) * settings.width * 3;
-          rt.queue().enqueueReadBuffer(out, CL_FALSE, i * floats * sizeof(float), floats * sizeof(float),
-                                       images[first + i].pixel(0, y0));
-        }
-        rt.queue().finish();
-        if (settings.on_progress)
-          settings.on_progress((double(first) + double(count) * (y0 + rows) / settings.height) / packed.size());
-      }
+  for (size_t first = 0; first < packed.size(); first += samples_per_launch) {
+    const size_t count = std::min(samples_per_launch, packed.size() - first);
+    std::vector<float> params(count * stride, 0.0f);
+    for (size_t i = 0; i < count; ++i) std::copy(packed[first + i].begin(), packed[first + i].end(), params.begin() + i * stride);
+    const cl::Buffer params_buf = ocl::upload(params);
+    const cl::Buffer seeds_buf = ocl::upload(seeds.data() + first, count);
+    for (int y0 = 0; y0 < settings.height; y0 += rows_per_launch) {
+      const int rows = std::min(rows_per_launch, settings.height - y0);
+      const size_t floats_per_image = size_t(rows) * settings.width * 3;
+      const cl::Buffer out = ocl::output_buffer(count * floats_per_image * sizeof(float));
+      ocl::launch(kernel, cl::NDRange(settings.width, rows, count), params_buf, static_cast<cl_int>(stride), seeds_buf,
+                  cl_float4{{settings.origin_u, settings.origin_v, pixel, settings.filter}}, static_cast<cl_int>(y0),
+                  static_cast<cl_int>(settings.supersample), out);
+      for (size_t i = 0; i < count; ++i)
+        ocl::download_async(out, i * floats_per_image, floats_per_image, images[first + i].pixel(0, y0));
+      ocl::finish();
+      if (settings.on_progress)
+        settings.on_progress((double(first) + double(count) * (y0 + rows) / settings.height) / packed.size());
     }
-    return 0;
-  });
+  }
   return images;
 }
 
