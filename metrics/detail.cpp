@@ -68,22 +68,68 @@ double correlation(std::span<const float> a, std::span<const float> b) {
   return sab / std::sqrt(saa * sbb);
 }
 
-double autocorrelation(const Plane& p, int dx, int dy) {
+float dot(const float* a, const float* b, std::size_t n) {
+  float s = 0;
+#pragma omp simd reduction(+ : s)
+  for (std::size_t i = 0; i < n; ++i) s += a[i] * b[i];
+  return s;
+}
+
+namespace {
+constexpr std::size_t kChunk = 256;  // float partial sums over at most this many values
+}
+
+double sum(std::span<const float> x) {
+  double total = 0;
+  for (std::size_t i = 0; i < x.size(); i += kChunk) {
+    const std::size_t m = std::min(kChunk, x.size() - i);
+    const float* p = x.data() + i;
+    float s = 0;
+#pragma omp simd reduction(+ : s)
+    for (std::size_t k = 0; k < m; ++k) s += p[k];
+    total += s;
+  }
+  return total;
+}
+
+double centre(std::span<float> x) {
+  if (x.empty()) return 0.0;
+  const float m = static_cast<float>(sum(x) / static_cast<double>(x.size()));
+  double ss = 0;
+  for (std::size_t i = 0; i < x.size(); i += kChunk) {
+    const std::size_t len = std::min(kChunk, x.size() - i);
+    float* p = x.data() + i;
+    float s = 0;
+#pragma omp simd reduction(+ : s)
+    for (std::size_t k = 0; k < len; ++k) {
+      p[k] -= m;
+      s += p[k] * p[k];
+    }
+    ss += s;
+  }
+  return ss;
+}
+
+double autocorrelation(const Plane& p, int dx, int dy, double energy) {
   const int n = p.size;
   dx = ((dx % n) + n) % n;
-  double s = 0, s0 = 0;
+  double s = 0;
   for (int y = 0; y < n; ++y) {
     const float* r = p.v.data() + static_cast<std::size_t>(y) * n;
     const float* q = p.v.data() + static_cast<std::size_t>(((y + dy) % n + n) % n) * n;
     // Two runs without a modulo in the loop: x + dx < n, then the wrapped part.
-    float a = 0, b = 0;
-    for (int x = 0; x < n - dx; ++x) a += r[x] * q[x + dx];
-    for (int x = n - dx; x < n; ++x) a += r[x] * q[x + dx - n];
-    for (int x = 0; x < n; ++x) b += r[x] * r[x];
-    s += a;
-    s0 += b;
+    s += dot(r, q + dx, n - dx) + dot(r + (n - dx), q, dx);
   }
-  return s0 <= 1e-20 ? 0.0 : s / s0;
+  return energy <= 1e-20 ? 0.0 : s / energy;
+}
+
+double autocorrelation(const Plane& p, int dx, int dy) {
+  double energy = 0;
+  for (int y = 0; y < p.size; ++y) {
+    const float* r = p.v.data() + static_cast<std::size_t>(y) * p.size;
+    energy += dot(r, r, p.size);
+  }
+  return autocorrelation(p, dx, dy, energy);
 }
 
 double weighted_rms(std::span<const float> a, std::span<const float> b,

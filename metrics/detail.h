@@ -23,10 +23,18 @@ Plane decimate(const Plane& in);
 inline Plane reduce(const Plane& in) { return decimate(blur5(in)); }
 
 double mean(std::span<const float> x);
+// Vectorised float reductions (OpenMP simd, fixed lane order: deterministic for one build).
+// Sums are accumulated per row-sized chunk in float and across chunks in double.
+float dot(const float* a, const float* b, std::size_t n);
+double sum(std::span<const float> x);
+// Subtracts the mean in place; returns the sum of squares after centring.
+double centre(std::span<float> x);
 // Pearson correlation of two equally long sequences (0 when either is constant).
 double correlation(std::span<const float> a, std::span<const float> b);
 // Normalised circular autocorrelation of a mean-removed plane at offset (dx, dy).
 double autocorrelation(const Plane& p, int dx, int dy);
+// Same, with the plane's sum of squares given (it is the same for every offset).
+double autocorrelation(const Plane& p, int dx, int dy, double energy);
 
 // sqrt(sum w_i (a_i - b_i)^2 / sum w_i).
 double weighted_rms(std::span<const float> a, std::span<const float> b,

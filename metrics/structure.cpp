@@ -21,6 +21,7 @@ constexpr int kOrientPairs = O * (O - 1) / 2;
 constexpr int kLowpassLevels = S + 1;
 constexpr int kLowpassOffsets = 8;
 constexpr int kEnergyOffsets = 4;
+constexpr std::size_t kCorrChunk = 256;  // float partial sums of a correlation
 
 struct Group {
   int size;
@@ -96,14 +97,6 @@ std::shared_ptr<const Bank> bank_for(int n) {
   return bank;
 }
 
-// Mean-removed copy of a plane, for autocorrelations.
-detail::Plane centred(const detail::Plane& p) {
-  detail::Plane c = p;
-  const float m = static_cast<float>(detail::mean(c.v));
-  for (float& v : c.v) v -= m;
-  return c;
-}
-
 }  // namespace
 
 std::size_t StructureMetric::feature_size() const { return kFeatureSize; }
@@ -132,32 +125,43 @@ std::vector<float> StructureMetric::compute(const Analysis& analysis) const {
   }
 
   std::vector<detail::Plane> levels;
-  levels.push_back(centred(detail::Plane{N, analysis.lightness}));
+  levels.push_back(detail::Plane{N, analysis.lightness});
+  detail::centre(levels.back().v);
   for (int s = 1; s < kLowpassLevels; ++s) levels.push_back(detail::reduce(levels.back()));
 
   static constexpr int kLowOff[kLowpassOffsets][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1},
                                                       {2, 0}, {0, 2}, {2, 2}, {2, -2}};
   for (int s = 0; s < kLowpassLevels; ++s) {
-    const detail::Plane c = centred(levels[s]);
-    for (const auto& o : kLowOff) lowac.push_back(static_cast<float>(detail::autocorrelation(c, o[0], o[1])));
+    detail::Plane c = levels[s];
+    const double e = detail::centre(c.v);
+    for (const auto& o : kLowOff) lowac.push_back(static_cast<float>(detail::autocorrelation(c, o[0], o[1], e)));
   }
 
   static constexpr int kEnergyOff[kEnergyOffsets][2] = {{4, 0}, {0, 4}, {4, 4}, {4, -4}};
-  std::vector<std::vector<float>> previous_mags;  // |z| of the finer scale, per orientation
+  // Mean-removed |z| of the previous (finer) scale per orientation, and their sums of squares.
+  std::vector<detail::Plane> previous;
+  detail::FftwArray<float> in, re, im;
+  detail::FftwArray<detail::Complex> spectrum, prod;
   for (int s = 0; s < S; ++s) {
     const int n = levels[s].size;
     const std::size_t nn = static_cast<std::size_t>(n) * n;
     const auto bank = bank_for(n);
     const std::size_t nh = static_cast<std::size_t>(n) * (n / 2 + 1);
-    detail::FftwArray<float> in(nn), re(nn), im(nn);
-    detail::FftwArray<detail::Complex> spectrum(nh), prod(nh);
+    if (in.size() != nn) {
+      in = detail::FftwArray<float>(nn);
+      re = detail::FftwArray<float>(nn);
+      im = detail::FftwArray<float>(nn);
+      spectrum = detail::FftwArray<detail::Complex>(nh);
+      prod = detail::FftwArray<detail::Complex>(nh);
+    }
     std::copy(levels[s].v.begin(), levels[s].v.end(), in.data());
     detail::fft_r2c(n, n, in, spectrum);
-    std::vector<std::vector<float>> mags(O, std::vector<float>(nn));
+    std::vector<detail::Plane> mags(O, detail::Plane{n, std::vector<float>(nn)});
+    double mag_energy[O];
     const float inv = 1.0f / static_cast<float>(nn);
     for (int o = 0; o < O; ++o) {
-      const std::vector<float>& he = bank->even[o];
-      const std::vector<float>& ho = bank->odd[o];
+      const float* he = bank->even[o].data();
+      const float* ho = bank->odd[o].data();
       for (std::size_t i = 0; i < nh; ++i) prod[i] = spectrum[i] * (he[i] * inv);
       detail::fft_c2r(n, n, prod, re);
       // -i * F * odd(H)
@@ -166,17 +170,29 @@ std::vector<float> StructureMetric::compute(const Analysis& analysis) const {
         prod[i] = detail::Complex(g.imag(), -g.real());
       }
       detail::fft_c2r(n, n, prod, im);
+      float* mag = mags[o].v.data();
+      const float* rp = re.data();
+      const float* ip = im.data();
       double sm = 0, sm2 = 0, sr2 = 0, sr4 = 0;
-      std::vector<float>& mag = mags[o];
-      for (std::size_t i = 0; i < nn; ++i) {
-        const float r = re[i], q = im[i];
-        const float e = r * r + q * q;
-        const float m = std::sqrt(e);
-        mag[i] = m;
-        sm += m;
-        sm2 += e;
-        sr2 += r * r;
-        sr4 += static_cast<double>(r * r) * (r * r);
+      // Row-sized chunks: vectorised float partial sums, accumulated in double.
+      for (std::size_t i0 = 0; i0 < nn; i0 += n) {
+        float cm = 0, ce = 0, cr2 = 0, cr4 = 0;
+#pragma omp simd reduction(+ : cm, ce, cr2, cr4)
+        for (std::size_t i = i0; i < i0 + n; ++i) {
+          const float r = rp[i], q = ip[i];
+          const float r2 = r * r;
+          const float e = r2 + q * q;
+          const float m = std::sqrt(e);
+          mag[i] = m;
+          cm += m;
+          ce += e;
+          cr2 += r2;
+          cr4 += r2 * r2;
+        }
+        sm += cm;
+        sm2 += ce;
+        sr2 += cr2;
+        sr4 += cr4;
       }
       const double mean_m = sm / nn, mean_e = sm2 / nn;
       energy.push_back(static_cast<float>(std::log(mean_e + 1e-12)));
@@ -184,28 +200,36 @@ std::vector<float> StructureMetric::compute(const Analysis& analysis) const {
       sparse.push_back(static_cast<float>(mean_m > 1e-9 ? std::sqrt(var_m) / mean_m : 0.0));
       const double r2 = sr2 / nn, r4 = sr4 / nn;
       kurt.push_back(static_cast<float>(std::log(r2 > 1e-14 ? r4 / (r2 * r2) : 3.0)));
-      detail::Plane mp{n, mag};
-      mp = centred(mp);
-      for (const auto& off : kEnergyOff) eac.push_back(static_cast<float>(detail::autocorrelation(mp, off[0], off[1])));
+      mag_energy[o] = detail::centre(mags[o].v);
+      for (const auto& off : kEnergyOff)
+        eac.push_back(static_cast<float>(detail::autocorrelation(mags[o], off[0], off[1], mag_energy[o])));
     }
+    // Correlations of the centred magnitudes: dot products over the product of norms.
+    auto corr = [nn](const float* a, double ea, const float* b, double eb) {
+      if (ea <= 1e-20 || eb <= 1e-20) return 0.0;
+      double d = 0;
+      for (std::size_t i = 0; i < nn; i += kCorrChunk) d += detail::dot(a + i, b + i, std::min(kCorrChunk, nn - i));
+      return d / std::sqrt(ea * eb);
+    };
     for (int o1 = 0; o1 < O; ++o1)
       for (int o2 = o1 + 1; o2 < O; ++o2)
-        ocorr.push_back(static_cast<float>(detail::correlation(mags[o1], mags[o2])));
+        ocorr.push_back(static_cast<float>(corr(mags[o1].v.data(), mag_energy[o1], mags[o2].v.data(), mag_energy[o2])));
     if (s > 0) {
       // The finer scale's energy averaged over 2x2 blocks lines up with this scale's pixels.
       const int fine = n * 2;
       std::vector<float> down(nn);
       for (int o = 0; o < O; ++o) {
-        const std::vector<float>& f = previous_mags[o];
+        const std::vector<float>& f = previous[o].v;
         for (int y = 0; y < n; ++y)
           for (int x = 0; x < n; ++x) {
             const std::size_t i = static_cast<std::size_t>(2 * y) * fine + 2 * x;
             down[static_cast<std::size_t>(y) * n + x] = 0.25f * (f[i] + f[i + 1] + f[i + fine] + f[i + fine + 1]);
           }
-        scorr.push_back(static_cast<float>(detail::correlation(down, mags[o])));
+        const double ed = detail::centre(down);
+        scorr.push_back(static_cast<float>(corr(down.data(), ed, mags[o].v.data(), mag_energy[o])));
       }
     }
-    previous_mags = std::move(mags);
+    previous = std::move(mags);
   }
 
   std::vector<float> f;

@@ -34,7 +34,7 @@ class StructureMetric final : public Metric {
   static constexpr int kOrientations = 4;
 
   std::string id() const override { return "structure"; }
-  int version() const override { return 1; }
+  int version() const override { return 2; }
   std::string summary() const override {
     return "oriented multi-scale filter statistics (Portilla-Simoncelli-like)";
   }
