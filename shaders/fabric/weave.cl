@@ -8,13 +8,6 @@
 // @param float fibre        = 0.4  [0, 1]              "Fibre streaks along each thread"
 // @param float irregularity = 0.3  [0, 1]              "Thread-to-thread colour and thickness variation"
 
-// Shading of one thread: `x` across it in [-1, 1], `t` along the crossing in [-1, 1].
-float thread_shade(float x, float t, float relief, float dw) {
-  const float across = mix(0.6667f, 1.0f - x * x, dw);
-  const float along = mix(0.8333f, 1.0f - 0.5f * t * t, dw);
-  return mix(1.0f, across * along, relief);
-}
-
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n = (float)P.threads;
   const float2 q = p * n;
@@ -23,15 +16,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 f = q - cell - 0.5f;  // [-0.5, 0.5)
   const int i = (int)cell.x, j = (int)cell.y;
   const int warp_on_top = ((i + j) & 1) == 0;
-  const float dw = pt_detail_weight(1.0f / w);
 
   // Per-thread random thickness and colour (warp threads by column, weft threads by row).
   const float rw = pt_rand(i, 0, 7, seed), rf = pt_rand(0, j, 8, seed);
   const float half_w_warp = 0.5f * (1.0f - P.gap) * (1.0f - 0.25f * P.irregularity * rw);
   const float half_w_weft = 0.5f * (1.0f - P.gap) * (1.0f - 0.25f * P.irregularity * rf);
-  const float cov_warp = pt_coverage(fabs(f.x) - half_w_warp, w);
-  const float cov_weft = pt_coverage(fabs(f.y) - half_w_weft, w);
-
   // Fibres: noise stretched along each thread.
   const float nw = pt_fbm((float2)(q.x * 10.0f, q.y * 1.2f), w * 10.0f, 3, 2.0f, 0.5f, pt_subseed(seed, 1u));
   const float nf = pt_fbm((float2)(q.x * 1.2f, q.y * 10.0f), w * 10.0f, 3, 2.0f, 0.5f, pt_subseed(seed, 2u));
@@ -39,18 +28,6 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float3 weft = pt_vary_color(P.weft_color, 0.3f * P.irregularity, rf, pt_rand(0, j, 10, seed));
   warp *= 1.0f + 0.5f * P.fibre * nw;
   weft *= 1.0f + 0.5f * P.fibre * nf;
-  warp *= thread_shade(f.x / half_w_warp, 2.0f * f.y, P.relief, dw);
-  weft *= thread_shade(f.y / half_w_weft, 2.0f * f.x, P.relief, dw);
-
-  // The top thread covers the bottom one; the bottom one shows beside it, dipping (darker).
-  const float dip = 1.0f - 0.45f * P.relief;
-  float3 top, bottom;
-  float cov_top, cov_bottom;
-  if (warp_on_top) {
-    top = warp; bottom = weft * dip; cov_top = cov_warp; cov_bottom = cov_weft;
-  } else {
-    top = weft; bottom = warp * dip; cov_top = cov_weft; cov_bottom = cov_warp;
-  }
-  const float3 under = mix(P.gap_color, bottom, cov_bottom);
-  return pt_saturate3(mix(under, top, cov_top));
+  return pt_saturate3(pt_weave_cell(f, w, half_w_warp, half_w_weft, warp_on_top, P.relief, warp, weft,
+                                    P.gap_color));
 }
