@@ -62,3 +62,18 @@ float pt_sd_hexagon(float2 p, float r) {
   p -= (float2)(clamp(p.x, -k.z * r, k.z * r), r);
   return length(p) * sign(p.y);
 }
+
+// Vesica (leaf / lens shape) along the y axis: intersection of two circles of radius r whose
+// centres are 2d apart; half length sqrt(r^2 - d^2), half width r - d (after Inigo Quilez).
+float pt_sd_vesica(float2 p, float r, float d) {
+  p = fabs(p);
+  const float b = sqrt(fmax(r * r - d * d, 0.0f));
+  return ((p.y - b) * d > p.x * b) ? length(p - (float2)(0.0f, b)) : length(p + (float2)(d, 0.0f)) - r;
+}
+
+// Vesica from its half length and half width (half_width <= half_length).
+float pt_sd_leaf(float2 p, float half_length, float half_width) {
+  // r - d = hw, r^2 - d^2 = hl^2  =>  r + d = hl^2 / hw.
+  const float s = half_length * half_length / fmax(half_width, 1e-6f);
+  return pt_sd_vesica(p, 0.5f * (s + half_width), 0.5f * (s - half_width));
+}
