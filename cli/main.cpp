@@ -48,6 +48,9 @@ int main(int argc, char** argv) {
 #ifdef PROCTEX_HAVE_METRICS
   cli::add_compare_command(app, global);
 #endif
+#ifdef PROCTEX_HAVE_CATALOG
+  cli::add_catalog_command(app, global);
+#endif
 
   app.parse_complete_callback([&] {
     if (!global.device.empty()) ocl::Runtime::configure(global.device);
