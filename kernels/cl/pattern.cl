@@ -107,3 +107,10 @@ float4 pt_bond_cell(float2 p, float ratio, int bond, float* len) {
   *len = ratio;
   return pt_brick_cell(p, ratio, 0.5f);
 }
+
+// Coverage of a line (stroke) of half width hw at distance d from its centre line, footprint w.
+// Lines thinner than a pixel are drawn one pixel wide with their area kept (dimmer, not broken).
+float pt_line_coverage(float d, float hw, float w) {
+  const float eff = fmax(hw, 0.5f * w);
+  return pt_coverage(d - eff, w) * (hw / eff);
+}

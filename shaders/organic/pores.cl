@@ -10,7 +10,7 @@
 
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float m = pt_fbm(p * 4.0f, fw * 4.0f, 5, 2.0f, 0.5f, pt_subseed(seed, 1u));
-  float3 c = mix(P.skin_color, P.blotch_color, (0.1f + 0.9f * P.mottle) * smoothstep(-0.2f, 0.5f, m));
+  float3 c = mix(P.skin_color, P.blotch_color, (0.2f + 0.8f * P.mottle) * smoothstep(-0.2f, 0.5f, m));
   // Wrinkles: two families of ridged lines at an angle to each other.
   const float2 a = (float2)(p.x + 0.3f * p.y, p.y - 0.3f * p.x) * (P.scale * 0.25f);
   const float2 b = (float2)(p.x - 0.5f * p.y, p.y + 0.5f * p.x) * (P.scale * 0.25f);
