@@ -35,8 +35,9 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
       const int ix = (int)k, iy = (int)row;
       float3 sc = pt_vary_color(P.color, P.variation, pt_rand(ix, iy, 0, seed), pt_rand(ix, iy, 1, seed));
       // Rim darkening and a highlight in the upper middle of the visible part.
-      const float inner = smoothstep(0.0f, P.rim * 0.55f, -sd);
-      sc = mix(P.edge_color, sc, mix(0.5f, inner, pt_detail_weight(P.rim * 0.55f / w)));
+      // Rim: a smooth ramp widened by the footprint (filtered when thinner than a pixel).
+      const float inner = pt_aa_smoothstep(0.0f, P.rim * 0.55f, -sd, w);
+      sc = mix(P.edge_color, sc, inner);
       const float hl = fmax(1.0f - length(d - (float2)(0.0f, 0.15f)) / 0.45f, 0.0f);
       sc *= 1.0f + P.sheen * hl * hl;
       col = mix(col, sc, cover);

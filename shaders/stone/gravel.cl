@@ -1,5 +1,5 @@
 // @shader "Gravel: packed angular or rounded pebbles, lit from one side, with dark gaps"
-// @param float scale       = 28   [6, 90] log         "Pebbles across the texture"
+// @param float scale       = 28   [6, 60] log         "Pebbles across the texture"
 // @param float gap         = 0.2  [0.02, 0.6] log     "Dark gaps between pebbles, fraction of a pebble"
 // @param float angularity  = 0.6  [0, 1]              "0 rounded pebbles, 1 crushed angular stone"
 // @param float lighting    = 0.8  [0, 1]              "Strength of the side lighting (relief)"

@@ -3,7 +3,7 @@
 // @param float stretch   = 4    [1, 12] log          "Elongation of the layers along x"
 // @param color color     = (0.10, 0.11, 0.12)        "Main colour (linear RGB)"
 // @param color color2    = (0.20, 0.20, 0.19)        "Second tone of the bands (linear RGB)"
-// @param float banding   = 0.5  [0, 1]               "Contrast between the two tones"
+// @param float banding   = 0.5  [0.1, 1]               "Contrast between the two tones"
 // @param float cleavage  = 0.5  [0, 1]               "Dark cleavage lines along the layers"
 // @param float roughness = 0.4  [0, 1]               "Fine surface texture"
 
