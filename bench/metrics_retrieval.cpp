@@ -44,6 +44,7 @@
 #include "metrics/calibration.h"
 #include "metrics/composite.h"
 #include "metrics/metric.h"
+#include "metrics/structure.h"
 #ifdef PROCTEX_BENCH_SHADERS
 #include "shaders/library.h"
 #include "shaders/parameter_space.h"
@@ -326,7 +327,7 @@ int main(int argc, char** argv) {
   int resolution = metrics::kDefaultResolution;
   int specs = 8, grid = 4, neighbours = 2;
   double step = 0.05, perturb = 0.15;
-  bool shaders = true;
+  bool shaders = true, structure_groups = false;
   std::set<std::string> skip;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--shared") && i + 1 < argc) shared = argv[++i];
@@ -338,6 +339,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--step") && i + 1 < argc) step = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--skip") && i + 1 < argc) skip.insert(argv[++i]);
     else if (!std::strcmp(argv[i], "--no-shaders")) shaders = false;
+    else if (!std::strcmp(argv[i], "--structure-groups")) structure_groups = true;
     else {
       std::fprintf(stderr,
                    "usage: %s [--shared DIR] [--resolution N] [--specs K] [--neighbours M] [--perturb SIGMA] "
@@ -405,6 +407,58 @@ int main(int argc, char** argv) {
       std::printf("\nWeight fit (grid step %.2f on the tune split, %zu + %zu queries, objective mean MRR "
                   "colour/grey): best %s -> MRR %.3f, top-1 %.1f%%\n",
                   step, tune_c.size(), tune_g.size(), weights_str(best_w).c_str(), best, 100 * best_top1);
+    }
+
+    if (structure_groups) {
+      // Each structure feature group alone (unit-scaled mean square), on the tune split; then a
+      // coordinate-descent fit of the group weights on the same split (structure alone, MRR).
+      size_t sc = 0;
+      while (sc < k && t.metrics[sc]->id() != "structure") ++sc;
+      const std::vector<int> pool = tune_g;
+      const auto groups = metrics::StructureMetric::groups();
+      std::vector<std::vector<float>> G(groups.size(), std::vector<float>(n * n, 0.0f));
+      size_t at = 0;
+      for (size_t gi = 0; gi < groups.size(); ++gi) {
+        const auto& g = groups[gi];
+        for (int i : pool)
+          for (int j : pool) {
+            double s2 = 0;
+            for (int e = 0; e < g.size; ++e) {
+              const double d = (static_cast<double>(t.f[sc][i][at + e]) - t.f[sc][j][at + e]) / g.unit;
+              s2 += d * d;
+            }
+            G[gi][static_cast<size_t>(i) * n + j] = static_cast<float>(s2 / g.size);
+          }
+        at += g.size;
+      }
+      std::printf("\nStructure groups (tune split):\n\n| group | top-1 alone | MRR alone | current weight |\n|---|---|---|---|\n");
+      std::vector<double> gw;
+      for (size_t gi = 0; gi < groups.size(); ++gi) {
+        std::vector<double> w(groups.size(), 0.0);
+        w[gi] = 1.0;
+        const Score r = evaluate(G, n, w, pool, items);
+        std::printf("| %s | %.1f%% | %.3f | %.2f |\n", groups[gi].name, 100 * r.top1, r.mrr, groups[gi].weight);
+        gw.push_back(groups[gi].weight);
+      }
+      // Ranking by sum w_g ms_g equals ranking by the structure distance sqrt(sum w ms / sum w).
+      double best_g = evaluate(G, n, gw, pool, items).mrr;
+      std::printf("\ncurrent group weights: MRR %.3f\n", best_g);
+      const double options[] = {0.0, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0};
+      for (int pass = 0; pass < 3; ++pass)
+        for (size_t gi = 0; gi < groups.size(); ++gi)
+          for (double v : options) {
+            std::vector<double> w = gw;
+            w[gi] = v;
+            if (std::all_of(w.begin(), w.end(), [](double x) { return x == 0; })) continue;
+            const double m = evaluate(G, n, w, pool, items).mrr;
+            if (m > best_g + 1e-9) {
+              best_g = m;
+              gw = w;
+            }
+          }
+      std::printf("fitted group weights:");
+      for (size_t gi = 0; gi < groups.size(); ++gi) std::printf(" %s %.3f", groups[gi].name, gw[gi]);
+      std::printf(" -> MRR %.3f\n", best_g);
     }
 
     struct Row {

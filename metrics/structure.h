@@ -24,6 +24,8 @@
 // Distance: per group, the mean squared difference divided by the group's unit (energy 1 nat,
 // sparseness 0.1, kurtosis 0.5, correlations 0.2, autocorrelations 0.1, pixel 0.5), then the
 // square root of the weighted mean over groups.
+#include <span>
+
 #include "metrics/metric.h"
 
 namespace proctex::metrics {
@@ -39,6 +41,16 @@ class StructureMetric final : public Metric {
     return "oriented multi-scale filter statistics (Portilla-Simoncelli-like)";
   }
   std::size_t feature_size() const override;
+
+  // The feature groups in layout order, with the unit each group's differences are divided by
+  // and its weight in the distance (exposed for the retrieval evaluation).
+  struct Group {
+    const char* name;
+    int size;
+    double unit;
+    double weight;
+  };
+  static std::span<const Group> groups();
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
   double scale() const override;
