@@ -12,20 +12,25 @@ typedef struct {
   float id;      // uniform random number of that cell
 } PtVoronoi;
 
-float2 pt_voronoi_point(int cx, int cy, float jitter, uint seed) {
-  return (float2)((float)cx, (float)cy) + 0.5f + jitter * (pt_rand2(cx, cy, seed) - 0.5f);
+// Feature point of lattice cell (cx, cy). `mixed` is pt_hash(seed), hashed once per lookup: one
+// hash per point (two 16-bit coordinates) keeps the 34 points of pt_voronoi cheap.
+float2 pt_voronoi_point(int cx, int cy, float jitter, uint mixed) {
+  const uint h = pt_hash(((uint)cx * 0x8da6b343U) ^ ((uint)cy * 0xd8163841U) ^ mixed);
+  const float2 u = (float2)((float)(h & 0xffffU), (float)(h >> 16)) * (1.0f / 65536.0f);
+  return (float2)((float)cx, (float)cy) + 0.5f + jitter * (u - 0.5f);
 }
 
 PtVoronoi pt_voronoi(float2 p, float jitter, uint seed) {
   const float2 base = floor(p);
   const int bx = (int)base.x, by = (int)base.y;
+  const uint mixed = pt_hash(seed);
   PtVoronoi r;
   float best = 1e9f;
   float2 mr = (float2)(0.0f);
   r.cell = (int2)(bx, by);
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
-      const float2 d = pt_voronoi_point(bx + dx, by + dy, jitter, seed) - p;
+      const float2 d = pt_voronoi_point(bx + dx, by + dy, jitter, mixed) - p;
       const float dd = dot(d, d);
       if (dd < best) { best = dd; mr = d; r.cell = (int2)(bx + dx, by + dy); }
     }
@@ -34,7 +39,7 @@ PtVoronoi pt_voronoi(float2 p, float jitter, uint seed) {
     for (int dx = -2; dx <= 2; ++dx) {
       const int cx = r.cell.x + dx, cy = r.cell.y + dy;
       if (dx == 0 && dy == 0) continue;
-      const float2 d = pt_voronoi_point(cx, cy, jitter, seed) - p;
+      const float2 d = pt_voronoi_point(cx, cy, jitter, mixed) - p;
       const float2 diff = d - mr;
       const float l2 = dot(diff, diff);
       if (l2 > 1e-10f) edge = fmin(edge, dot(0.5f * (mr + d), diff) * rsqrt(l2));

@@ -26,6 +26,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
         if (depth <= top) continue;
         const float2 dir = normalize((float2)(f.z, pt_fract(f.w * 5.3f)) - 0.5f + 1e-4f);
         const float2 d = q - f.xy;
+        if (dot(d, d) > (hl + w) * (hl + w)) continue;  // out of reach
         const float2 l = (float2)(d.x * dir.y - d.y * dir.x, dot(d, dir));  // y along the leaf
         const float s = pt_sd_leaf(l, hl, hw);
         const float cover = pt_coverage(s, w);

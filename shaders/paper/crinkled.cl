@@ -25,7 +25,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float s = facet_layer(q, w, light, pt_subseed(seed, 1u));
   s += P.detail * 0.6f * facet_layer(q * 2.3f + 1.7f, w * 2.3f, light, pt_subseed(seed, 2u));
   s += P.detail * 0.35f * facet_layer(q * 5.1f + 4.1f, w * 5.1f, light, pt_subseed(seed, 3u));
-  const float f = pt_fbm(p * 90.0f, fw * 90.0f, 3, 2.0f, 0.5f, pt_subseed(seed, 4u));
+  const float f = pt_fbm(p * 90.0f, fw * 90.0f, 2, 2.0f, 0.5f, pt_subseed(seed, 4u));
   const float3 c = P.paper_color * (1.0f + 0.9f * P.crumple * s + 0.12f * P.fibres * f);
   return pt_saturate3(c);
 }

@@ -12,7 +12,7 @@
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   float2 q = p * P.scale;
   const float w = fw * P.scale;
-  q = pt_warp(q, w, 0.2f * P.irregularity, 2.0f, 3, pt_subseed(seed, 1u));
+  q = pt_warp(q, w, 0.2f * P.irregularity, 2.0f, 2, pt_subseed(seed, 1u));
   const PtVoronoi v = pt_voronoi(q, 1.0f, seed);
   const float d = 0.5f * P.crack_width - v.edge;
   const float plate = pt_coverage(d, w);
@@ -23,7 +23,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float fine = P.fine_cracks * (1.0f - pt_coverage(d2, w * 2.7f)) * 0.8f;
   float3 mc = pt_vary_color(P.mud_color, P.variation, v.id, pt_rand(v.cell.x, v.cell.y, 1, seed));
   mc *= 1.0f + P.curl * 0.35f * (1.0f - smoothstep(0.0f, 0.2f, -d));
-  const float n = pt_fbm(q * 3.0f, w * 3.0f, 4, 2.0f, 0.6f, pt_subseed(seed, 3u));
+  const float n = pt_fbm(q * 3.0f, w * 3.0f, 3, 2.0f, 0.6f, pt_subseed(seed, 3u));
   mc *= 1.0f + P.roughness * 0.4f * n;
   mc = mix(mc, P.crack_color, fine);
   return pt_saturate3(mix(P.crack_color, mc, plate));
