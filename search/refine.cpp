@@ -129,6 +129,28 @@ void polish_discrete(Objective& objective, RefineResult& result) {
   }
 }
 
+// Evaluates every value of each discrete parameter with at most `max_levels` values (the others
+// held), all in one launch, and moves to the best: a count like a star's points is cheaper to
+// enumerate than to search, and the simplex cannot see across its plateaus.
+void sweep_discrete(Objective& objective, RefineResult& result, int max_levels) {
+  const auto& dims = objective.space().dims();
+  for (size_t i = 0; i < dims.size() && !objective.exhausted(); ++i) {
+    if (!dims[i].levels || dims[i].levels > max_levels) continue;
+    std::vector<std::vector<double>> candidates;
+    for (int k = 0; k < dims[i].levels; ++k) {
+      auto p = result.unit;
+      p[i] = (k + 0.5) / dims[i].levels;
+      candidates.push_back(p);
+    }
+    const auto values = objective.evaluate(candidates);
+    const auto best = std::max_element(values.begin(), values.end()) - values.begin();
+    if (values[best] > result.similarity) {
+      result.similarity = values[best];
+      result.unit = candidates[best];
+    }
+  }
+}
+
 }  // namespace
 
 Optimizer parse_optimizer(const std::string& name) {
@@ -160,6 +182,7 @@ RefineResult refine(Objective& objective, std::vector<double> start, const Refin
     return result;
   }
   result.similarity = objective.evaluate(result.unit);
+  sweep_discrete(objective, result, options.sweep_levels);
   for (int pass = 0; pass <= options.max_restarts && !objective.exhausted(); ++pass) {
     const double before = result.similarity;
     const long used = objective.evaluations() - first_evaluation;

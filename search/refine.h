@@ -27,6 +27,7 @@ struct RefineOptions {
   double tolerance = 1e-3;        // stop when a pass improves similarity by less than this
   int max_restarts = 3;           // restarts from the terminal point
   long max_evaluations = 400;     // renders per refinement, across restarts
+  int sweep_levels = 16;          // discrete parameters with at most this many values are enumerated first
 };
 
 struct RefineResult {

@@ -1,0 +1,179 @@
+// proctex match PHOTO: the shader and parameters that reproduce a photo.
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "catalog/catalog.h"
+#include "catalog/store.h"
+#include "cli/commands.h"
+#include "cli/output.h"
+#include "core/error.h"
+#include "search/match.h"
+#include "shaders/renderer.h"
+
+namespace proctex::cli {
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_interrupt(int) { g_interrupted = true; }
+
+struct MatchCliOptions {
+  std::string photo;
+  std::string db;
+  std::string crop;
+  std::string shaders;
+  std::string optimizer = "subplex";
+  std::string budget;
+  std::vector<std::string> fix;
+  std::string output;
+  std::string render;
+  std::string compare;
+  int size = 1024;
+  int candidates = 6;
+  double threshold = 0.0;
+  int starts = 3;
+  long max_evaluations = 300;
+  bool json = false;
+};
+
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, sep))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// "30s", "2m" (seconds) or "500" (evaluations).
+search::Budget parse_budget(const std::string& text) {
+  search::Budget b;
+  if (text.empty()) return b;
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    const std::string unit = text.substr(used);
+    if (v <= 0) throw std::invalid_argument(text);
+    if (unit == "s") b.max_seconds = v;
+    else if (unit == "m") b.max_seconds = 60 * v;
+    else if (unit.empty() || unit == "e") b.max_evaluations = static_cast<long>(v);
+    else throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw UsageError("--budget '" + text + "' is not a time (30s, 2m) or an evaluation count (500)",
+                     "write --budget 20s or --budget 400");
+  }
+  return b;
+}
+
+std::map<std::string, nlohmann::json> parse_fixed(const std::vector<std::string>& items) {
+  std::map<std::string, nlohmann::json> out;
+  for (const auto& item : items) {
+    // Reuse the inline-spec parser for the value syntax (numbers, enums, colours).
+    const TextureSpec s = parse_spec_argument("x:" + item);
+    if (s.params.empty()) throw UsageError("--fix '" + item + "' is not name=value", "write --fix rows=8");
+    for (const auto& [k, v] : s.params) out[k] = v;
+  }
+  return out;
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& j) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!(out << j.dump(2) << "\n")) throw Error("cannot write '" + path + "'", "check the folder exists and is writable");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+void write_compare(const std::string& path, const Image& target, const Image& match, const search::MatchResult& r) {
+  const int side = std::min(512, std::max(match.width, 256));
+  const Image t = resize(center_crop_square(target), side, side);
+  const Image m = resize(match, side, side);
+  save_image(contact_sheet({t, m}, {"target", fmt::format("{} S={:.2f} ({})", r.spec.shader, r.similarity, r.verdict)}, 2, side),
+             path);
+}
+
+void run(const MatchCliOptions& o, const GlobalOptions& global) {
+  search::MatchOptions options;
+  options.shaders = split(o.shaders, ',');
+  options.candidate_shaders = o.candidates;
+  options.shader_threshold = o.threshold;
+  options.starts = o.starts;
+  options.refine.optimizer = search::parse_optimizer(o.optimizer);
+  options.refine.max_evaluations = o.max_evaluations;
+  options.budget = parse_budget(o.budget);
+  options.fixed = parse_fixed(o.fix);
+
+  const Image target = search::prepare_target(o.photo, o.crop);
+  const std::filesystem::path db = o.db.empty() ? catalog::default_catalog_path() : std::filesystem::path(o.db);
+  if (!std::filesystem::exists(db))
+    throw Error("no catalogue at '" + db.string() + "'", "build one: proctex catalog build --db " + db.string());
+  catalog::Store store(db, catalog::Store::Access::Read);
+
+  g_interrupted = false;
+  auto previous = std::signal(SIGINT, on_interrupt);
+  Progress progress("match", 0, global.quiet);
+  const auto result = search::match(target, store, options, [&](const search::MatchProgress& p) {
+    progress.update(0, fmt::format("{}  best {:.3f} {}  {} renders", p.stage, p.best, p.best_shader, p.evaluations));
+  }, &g_interrupted);
+  progress.finish();
+  std::signal(SIGINT, previous);
+
+  nlohmann::json j = result.to_json();
+  j["target"] = {{"path", o.photo}, {"width", target.width}, {"height", target.height}, {"crop", o.crop}};
+  if (!o.output.empty()) write_json_file(o.output, j);
+  if (!o.render.empty() || !o.compare.empty()) {
+    Renderer renderer;
+    RenderSettings settings;
+    settings.width = settings.height = o.size;
+    const Image img = renderer.render(result.spec, settings);
+    if (!o.render.empty()) save_image(img, o.render);
+    if (!o.compare.empty()) write_compare(o.compare, target, img, result);
+  }
+  if (o.json) return print_json(j);
+  std::printf("%s: %s (similarity %.3f, %s)\n", o.photo.c_str(), result.spec.shader.c_str(), result.similarity,
+              result.verdict.c_str());
+  std::printf("spec: %s\n", result.spec.to_json().dump().c_str());
+  std::string parts;
+  for (const auto& [k, v] : result.per_metric) parts += fmt::format("{}{} {:.3f}", parts.empty() ? "" : ", ", k, v);
+  std::printf("metrics: %s\n", parts.c_str());
+  std::printf("%ld renders in %s%s\n", result.evaluations, format_seconds(result.timings["total"].get<double>()).c_str(),
+              result.stopped_early ? " (stopped early: best so far)" : "");
+  for (const auto* path : {&o.output, &o.render, &o.compare})
+    if (!path->empty()) std::printf("wrote %s\n", path->c_str());
+}
+
+}  // namespace
+
+void add_match_command(CLI::App& app, GlobalOptions& global) {
+  auto o = std::make_shared<MatchCliOptions>();
+  auto* cmd = app.add_subcommand("match", "Find the shader and parameters that reproduce a photo");
+  cmd->footer(
+      "Searches the catalogue (proctex catalog build) for the closest samples, then refines their\n"
+      "parameters with NLopt. Verdict: good (similarity >= 0.5), approximate (>= 0.25), no-match.\n"
+      "  proctex match brick.png --render match.png --size 4096 --compare cmp.png\n"
+      "  proctex match wall.jpg --shaders bricks,tiles --fix rows=8 --budget 20s -o result.json\n"
+      "Ctrl-C stops the search and returns the best match so far.");
+  cmd->add_option("photo", o->photo, "Target image (PNG, JPEG, TIFF, EXR)")->required();
+  cmd->add_option("--db", o->db, "Catalogue (default: $PROCTEX_CATALOG or ~/.cache/proctex/catalog.sqlite)");
+  cmd->add_option("--crop", o->crop, "Use only this part of the photo: x,y,w,h (default: the whole photo, centre square)");
+  cmd->add_option("--shaders", o->shaders, "Only these shaders, comma-separated (your knowledge of the material)");
+  cmd->add_option("--candidates", o->candidates, "Shaders kept after the pruned-graph ranking")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--threshold", o->threshold, "Also keep every shader whose pruned best similarity reaches this")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--starts", o->starts, "Starting points refined")->capture_default_str()->check(CLI::Range(1, 64));
+  cmd->add_option("--optimizer", o->optimizer, "neldermead, subplex, bobyqa, global or gradient")->capture_default_str();
+  cmd->add_option("--evaluations", o->max_evaluations, "Renders per starting point")->capture_default_str()->check(CLI::Range(1L, 1000000L));
+  cmd->add_option("--budget", o->budget, "Stop after this time (20s, 2m) or this many renders (500), with the best so far");
+  cmd->add_option("--fix", o->fix, "Pin a parameter: name=value (repeatable)");
+  cmd->add_option("-o,--output", o->output, "Write the match result JSON here");
+  cmd->add_option("--render", o->render, "Render the match to this image");
+  cmd->add_option("--size", o->size, "Size of --render and --compare images")->capture_default_str()->check(CLI::Range(16, 65536));
+  cmd->add_option("--compare", o->compare, "Write target and match side by side");
+  cmd->add_flag("--json", o->json, "Print the match result as JSON");
+  cmd->callback([o, &global] { run(*o, global); });
+}
+
+}  // namespace proctex::cli

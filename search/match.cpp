@@ -1,0 +1,284 @@
+#include "search/match.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "catalog/store.h"
+#include "core/error.h"
+#include "metrics/composite.h"
+#include "shaders/library.h"
+#include "shaders/parameter_space.h"
+
+namespace proctex::search {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+struct Start {
+  std::string shader;
+  const catalog::Sample* sample = nullptr;
+  double similarity = 0.0;
+};
+
+struct ShaderScan {
+  catalog::ShaderCatalogue catalogue;
+  std::vector<double> similarity;  // per sample, against the target at full resolution
+  double best_pruned = 0.0;
+  double best_full = 0.0;
+};
+
+std::vector<int> parse_crop(const std::string& text) {
+  std::vector<int> v;
+  std::stringstream in(text);
+  std::string part;
+  while (std::getline(in, part, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stoi(part, &used));
+      if (used != part.size()) throw std::invalid_argument(part);
+    } catch (const std::exception&) {
+      throw UsageError("--crop '" + text + "' is not x,y,w,h", "write e.g. --crop 100,50,512,512");
+    }
+  }
+  if (v.size() != 4) throw UsageError("--crop '" + text + "' is not x,y,w,h", "write e.g. --crop 100,50,512,512");
+  return v;
+}
+
+// Checks that the catalogue's features were made by the metric this proctex computes.
+void check_metric(const catalog::ShaderSummary& s, const metrics::Metric& metric, int resolution,
+                  const std::filesystem::path& db) {
+  if (s.metric != metric.id() || s.metric_version != metric.version() || s.resolution != resolution)
+    throw Error("catalogue '" + db.string() + "' is stale: shader '" + s.name + "' has " + s.metric + " v" +
+                    std::to_string(s.metric_version) + " features at " + std::to_string(s.resolution) +
+                    " px, this proctex compares " + metric.id() + " v" + std::to_string(metric.version()) + " at " +
+                    std::to_string(resolution) + " px",
+                "rebuild it: proctex catalog build --db " + db.string() + " --force");
+}
+
+std::vector<catalog::ShaderSummary> usable_shaders(catalog::Store& store, const MatchOptions& o,
+                                                   const metrics::Metric& metric) {
+  auto all = store.shaders();
+  if (all.empty())
+    throw Error("catalogue '" + store.path().string() + "' holds no shader",
+                "build it first: proctex catalog build --db " + store.path().string());
+  std::vector<catalog::ShaderSummary> out;
+  for (const auto& name : o.shaders) {
+    auto it = std::find_if(all.begin(), all.end(), [&](const auto& s) { return s.name == name; });
+    if (it == all.end())
+      throw UsageError("shader '" + name + "' is not in catalogue '" + store.path().string() + "'",
+                       "build it: proctex catalog build --shaders " + name);
+  }
+  for (auto& s : all) {
+    if (!o.shaders.empty() && std::find(o.shaders.begin(), o.shaders.end(), s.name) == o.shaders.end()) continue;
+    if (!ShaderLibrary::builtin().find(s.name)) continue;  // a user's shader no longer on the path
+    check_metric(s, metric, o.resolution, store.path());
+    out.push_back(std::move(s));
+  }
+  if (out.empty()) throw Error("no shader of the catalogue is in the shader library", "rebuild the catalogue");
+  return out;
+}
+
+// At most `per_shader` starts from one shader, so one shader's many near-duplicate samples do not
+// crowd out a second plausible shader; among near-equal similarities smoother samples go first
+// (thesis 4.4: faster and better refinement).
+std::vector<Start> choose_starts(const std::vector<ShaderScan>& scans, const std::vector<int>& chosen, int k) {
+  std::vector<Start> all;
+  for (int c : chosen) {
+    const auto& scan = scans[c];
+    for (size_t i = 0; i < scan.catalogue.samples.size(); ++i)
+      all.push_back({scan.catalogue.shader, &scan.catalogue.samples[i], scan.similarity[i]});
+  }
+  std::sort(all.begin(), all.end(), [](const Start& a, const Start& b) {
+    if (std::fabs(a.similarity - b.similarity) > 0.01) return a.similarity > b.similarity;
+    return a.sample->smoothness < b.sample->smoothness;
+  });
+  const int per_shader = k >= 3 ? (k + 1) / 2 : k;
+  std::map<std::string, int> used;
+  std::vector<Start> out;
+  for (const auto& s : all) {
+    if (static_cast<int>(out.size()) >= k) break;
+    if (used[s.shader] >= per_shader) continue;
+    ++used[s.shader];
+    out.push_back(s);
+  }
+  return out;
+}
+
+// The packed base vector of a start with --fix values applied, and the names pinned by them.
+std::vector<float> apply_fixed(const ShaderDecl& decl, const std::vector<float>& packed,
+                               const std::map<std::string, nlohmann::json>& fixed, std::vector<std::string>& pinned) {
+  TextureSpec spec = spec_from_packed(decl, packed, 0);
+  for (const auto& [name, value] : fixed) {
+    if (!decl.find(name)) continue;  // --fix applies to the shaders that have the parameter
+    spec.params[name] = value;
+    pinned.push_back(name);
+  }
+  return resolve(decl, spec);
+}
+
+}  // namespace
+
+std::string verdict_for(double s) {
+  if (s >= kGoodMatch) return "good";
+  if (s >= kApproximateMatch) return "approximate";
+  return "no-match";
+}
+
+Image prepare_target(const std::filesystem::path& photo, const std::string& crop_text) {
+  Image image = load_image(photo);
+  if (!crop_text.empty()) {
+    const auto c = parse_crop(crop_text);
+    image = crop(image, c[0], c[1], c[2], c[3]);
+  }
+  if (std::min(image.width, image.height) < 32)
+    throw UsageError("target is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                         " pixels; a texture needs at least 32 on each side",
+                     "use a larger photo or crop");
+  return image;
+}
+
+nlohmann::json MatchResult::to_json() const {
+  nlohmann::json metrics_json = nlohmann::json::object();
+  for (const auto& [k, v] : per_metric) metrics_json[k] = v;
+  nlohmann::json cands = nlohmann::json::array();
+  for (const auto& c : candidates)
+    cands.push_back({{"shader", c.shader}, {"best_pruned", c.best_pruned}, {"best_full", c.best_full}});
+  return {{"spec", spec.to_json()}, {"similarity", similarity},     {"metrics", metrics_json},
+          {"verdict", verdict},      {"evaluations", evaluations}, {"stopped_early", stopped_early},
+          {"candidates", cands},     {"starts", starts},           {"timings", timings},
+          {"catalogue", catalogue},
+          {"thresholds", {{"good", kGoodMatch}, {"approximate", kApproximateMatch}}}};
+}
+
+MatchResult match(const Image& target, catalog::Store& store, const MatchOptions& o,
+                  const std::function<void(const MatchProgress&)>& progress, std::atomic<bool>* stop) {
+  const auto t_start = Clock::now();
+  const metrics::Metric& metric = metrics::default_metric();
+  const auto& library = ShaderLibrary::builtin();
+  MatchResult result;
+  MatchProgress state;
+  auto report = [&](const std::string& stage) {
+    state.stage = stage;
+    state.elapsed = seconds_since(t_start);
+    if (progress) progress(state);
+  };
+
+  // 1. Target features, once per resolution.
+  report("target");
+  const auto shaders = usable_shaders(store, o, metric);
+  const metrics::Features target_full = metric.features(target, o.resolution);
+  const metrics::Features target_coarse = metric.features(target, o.coarse_resolution);
+  result.timings["target"] = seconds_since(t_start);
+
+  // 2. Global search: pruned graphs rank shaders, full catalogues of the candidates give starts.
+  report("global");
+  const auto t_global = Clock::now();
+  std::vector<ShaderScan> scans;
+  for (const auto& s : shaders) {
+    ShaderScan scan;
+    scan.catalogue = store.load(s.name, false);
+    for (const auto& sample : scan.catalogue.samples) scan.similarity.push_back(metric.similarity(target_full, sample.features));
+    for (int i : scan.catalogue.pruned) scan.best_pruned = std::max(scan.best_pruned, scan.similarity[i]);
+    scan.best_full = *std::max_element(scan.similarity.begin(), scan.similarity.end());
+    scans.push_back(std::move(scan));
+  }
+  std::vector<int> order(scans.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_pruned > scans[b].best_pruned; });
+  std::vector<int> chosen;
+  for (size_t r = 0; r < order.size(); ++r) {
+    const bool by_rank = static_cast<int>(r) < o.candidate_shaders || !o.shaders.empty();
+    const bool by_threshold = o.shader_threshold > 0 && scans[order[r]].best_pruned >= o.shader_threshold;
+    if (by_rank || by_threshold) chosen.push_back(order[r]);
+  }
+  for (int c : chosen)
+    result.candidates.push_back({scans[c].catalogue.shader, scans[c].best_pruned, scans[c].best_full});
+  const auto starts = choose_starts(scans, chosen, std::max(1, o.starts));
+  result.timings["global"] = seconds_since(t_global);
+
+  // 3. Local refinement from each start, at the coarse resolution.
+  const auto t_local = Clock::now();
+  Renderer renderer(library);
+  struct Refined {
+    const ShaderDecl* decl;
+    std::vector<float> packed;
+    uint32_t seed;
+    double coarse;
+  };
+  std::vector<Refined> refined;
+  long evaluations = 0;
+  for (size_t i = 0; i < starts.size(); ++i) {
+    const auto& st = starts[i];
+    const ShaderDecl& decl = library.get(st.shader);
+    std::vector<std::string> pinned;
+    const auto base = apply_fixed(decl, st.sample->packed, o.fixed, pinned);
+    const ParameterSpace space(decl, base, pinned);
+    Objective objective(space, target_coarse, metric, renderer, st.sample->seed, o.coarse_resolution);
+    Budget budget = o.budget;
+    if (budget.max_evaluations > 0) budget.max_evaluations = std::max<long>(0, budget.max_evaluations - evaluations);
+    if (budget.max_seconds > 0) budget.max_seconds = std::max(0.0, budget.max_seconds - seconds_since(t_start));
+    objective.set_budget(budget);
+    objective.on_progress = [&](const Objective& obj) {
+      if (stop && *stop) objective.stop();
+      if (obj.best().similarity > state.best) {
+        state.best = obj.best().similarity;
+        state.best_shader = st.shader;
+      }
+      state.evaluations = evaluations + obj.evaluations();
+      report("refine " + std::to_string(i + 1) + "/" + std::to_string(starts.size()));
+    };
+    const bool out_of_budget = objective.exhausted() || (stop && *stop);
+    RefineResult r;
+    if (out_of_budget) {
+      r.unit = space.to_unit(base);
+      r.similarity = objective.evaluate(r.unit);  // one render keeps the start in the running
+    } else {
+      r = refine(objective, space.to_unit(base), o.refine);
+    }
+    evaluations += objective.evaluations();
+    result.stopped_early |= objective.exhausted() || (stop && *stop);
+    refined.push_back({&decl, space.to_packed(r.unit), st.sample->seed, r.similarity});
+    result.starts.push_back({{"shader", st.shader}, {"catalogue_similarity", st.similarity},
+                             {"refined_similarity_coarse", r.similarity}, {"evaluations", objective.evaluations()}});
+  }
+  result.timings["local"] = seconds_since(t_local);
+
+  // 4. Final scoring at the full resolution: the coarse optimum of each start, and its start.
+  report("final");
+  const auto t_final = Clock::now();
+  double best = -1.0;
+  RenderSettings full;
+  full.width = full.height = o.resolution;
+  for (size_t i = 0; i < refined.size(); ++i) {
+    const auto& rf = refined[i];
+    const Image img = renderer.render_batch(*rf.decl, {rf.packed}, {rf.seed}, full).front();
+    const metrics::Features f = metric.features(img, o.resolution);
+    const double s = metric.similarity(target_full, f);
+    result.starts[i]["refined_similarity"] = s;
+    if (s > best) {
+      best = s;
+      result.spec = spec_from_packed(*rf.decl, rf.packed, rf.seed);
+      result.similarity = s;
+      result.per_metric.clear();
+      if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
+        for (const auto& [name, value] : composite->breakdown(target_full.values, f.values)) result.per_metric[name] = value;
+      result.per_metric[metric.id()] = s;
+    }
+  }
+  result.evaluations = evaluations + static_cast<long>(refined.size());
+  result.verdict = verdict_for(result.similarity);
+  result.timings["final"] = seconds_since(t_final);
+  result.timings["total"] = seconds_since(t_start);
+  nlohmann::json names = nlohmann::json::array();
+  for (const auto& s : shaders) names.push_back(s.name);
+  result.catalogue = {{"path", store.path().string()}, {"shaders", names}, {"metric", metric.id()},
+                      {"metric_version", metric.version()}, {"resolution", o.resolution}};
+  return result;
+}
+
+}  // namespace proctex::search

@@ -1,0 +1,86 @@
+#pragma once
+// proctex match: a photo in, a shader and its parameters out (thesis sections 4.3-4.6).
+//   1. target: crop, analysis features computed once (full and coarse resolution);
+//   2. global search: every shader's pruned graph ranks the shaders (top-M and/or a threshold, or
+//      the user's --shaders), then the candidates' full catalogues are scanned exhaustively and the
+//      top-k samples become starting points, ordered by similarity, ties by local smoothness H;
+//   3. local refinement with NLopt from each start at the coarse resolution (coarse-to-fine), the
+//      final candidates re-scored at the full resolution;
+//   4. a verdict from documented thresholds (a large residual flags a failed match).
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "image/image.h"
+#include "search/refine.h"
+#include "shaders/spec.h"
+
+namespace proctex::catalog {
+class Store;
+}
+
+namespace proctex::search {
+
+// Verdict thresholds on the default (composite) similarity. Two crops of one photographed texture
+// score about 0.6-0.75 under it and different textures 0.1-0.25 (docs/metrics.md), so:
+inline constexpr double kGoodMatch = 0.5;         // as similar as another crop of the same texture
+inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unrelated texture
+
+std::string verdict_for(double similarity);
+
+struct MatchOptions {
+  std::vector<std::string> shaders;   // restrict the search to these (empty: whole catalogue)
+  int candidate_shaders = 6;          // top-M shaders by their pruned graph
+  double shader_threshold = 0.0;      // also every shader whose pruned best reaches this
+  int starts = 3;                     // top-k starting points refined
+  int resolution = 256;               // analysis resolution of the result (catalogue features)
+  int coarse_resolution = 128;        // analysis resolution during refinement
+  RefineOptions refine;
+  Budget budget;                      // whole match
+  std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
+};
+
+struct Candidate {
+  std::string shader;
+  double best_pruned = 0.0;   // best similarity over the pruned graph
+  double best_full = 0.0;     // best over the full catalogue (candidates only)
+};
+
+struct MatchResult {
+  TextureSpec spec;
+  double similarity = 0.0;                  // default metric at `resolution`
+  std::map<std::string, double> per_metric;  // components of the default metric
+  std::string verdict;
+  long evaluations = 0;
+  bool stopped_early = false;               // budget or Ctrl-C
+  std::vector<Candidate> candidates;
+  nlohmann::json starts = nlohmann::json::array();  // each start: shader, catalogue similarity, refined
+  nlohmann::json timings = nlohmann::json::object();
+  nlohmann::json catalogue = nlohmann::json::object();  // path, shaders, metric id and version
+
+  nlohmann::json to_json() const;
+};
+
+struct MatchProgress {
+  std::string stage;          // "target", "global", "refine 2/3", "final"
+  double best = 0.0;          // best similarity so far (coarse during refinement)
+  std::string best_shader;
+  long evaluations = 0;
+  double elapsed = 0.0;
+};
+
+// Loads and crops the photo ("x,y,w,h" or empty for the whole image) and checks its size.
+Image prepare_target(const std::filesystem::path& photo, const std::string& crop);
+
+// Runs the whole match. `stop` may be set from another thread or a signal handler: the match
+// returns the best so far. Throws proctex::Error for an empty or stale catalogue.
+MatchResult match(const Image& target, catalog::Store& store, const MatchOptions& options,
+                  const std::function<void(const MatchProgress&)>& progress = {},
+                  std::atomic<bool>* stop = nullptr);
+
+}  // namespace proctex::search
