@@ -13,8 +13,12 @@ float facet_layer(float2 q, float w, float2 light, uint seed) {
   const PtCellular c = pt_cellular(q, 1.0f, seed);
   const float2 tilt = pt_rand2(c.cell.x, c.cell.y, seed ^ 0xabcdefU) - 0.5f;
   const float s = dot(tilt, light);
-  const float border = clamp(0.5f * (c.f2 - c.f1) / fmax(w, 1e-6f) + 0.5f, 0.0f, 1.0f);
-  return s * border * pt_detail_weight(1.0f / w);
+  const float e = 0.5f * (c.f2 - c.f1);  // about the distance to the crease
+  const float border = clamp(e / fmax(w, 1e-6f) + 0.5f, 0.0f, 1.0f);
+  // The crease itself: a thin ridge (bright) or valley (dark), drawn as a filtered line.
+  const float ridge = (pt_u01(pt_hash2(c.cell.x, c.cell.y, seed ^ 0x51ed27U)) - 0.5f) * 0.6f;
+  const float crease = ridge * pt_line_coverage(e, 0.015f, w);
+  return (s * border + crease) * pt_detail_weight(1.0f / w);
 }
 
 float3 shade(float2 p, float fw, uint seed, const Params P) {
