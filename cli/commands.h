@@ -18,5 +18,6 @@ void add_shaders_command(CLI::App& app, GlobalOptions& global);
 void add_render_command(CLI::App& app, GlobalOptions& global);
 void add_compare_command(CLI::App& app, GlobalOptions& global);
 void add_catalog_command(CLI::App& app, GlobalOptions& global);
+void add_match_command(CLI::App& app, GlobalOptions& global);
 
 }  // namespace proctex::cli

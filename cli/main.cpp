@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
 #endif
 #ifdef PROCTEX_HAVE_CATALOG
   cli::add_catalog_command(app, global);
+  cli::add_match_command(app, global);
 #endif
 
   app.parse_complete_callback([&] {
