@@ -29,6 +29,6 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n = pt_fbm(q * 3.0f, w * 3.0f, 3, 2.0f, 0.5f, pt_subseed(seed, 2u));
   sc *= light * (1.0f + P.roughness * 0.5f * n);
   // Pebbles darken into their own shadow at the rim.
-  sc *= mix(0.4f, 1.0f, smoothstep(0.0f, 0.2f, inner));
+  sc *= mix(0.4f, 1.0f, pt_aa_smoothstep(0.0f, 0.2f, inner, w));
   return pt_saturate3(mix(P.gap_color, sc, cover));
 }

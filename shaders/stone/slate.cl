@@ -12,7 +12,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float w = fw * P.scale;
   const float b = pt_fbm(q, w, 6, 2.0f, 0.5f, pt_subseed(seed, 1u));
   const float t = smoothstep(-0.4f, 0.4f, b * (0.5f + 1.5f * P.banding));
-  float3 c = mix(P.color, P.color2, mix(0.5f, t, P.banding));
+  float3 c = mix(P.color, P.color2, mix(0.5f, t, 0.3f + 0.7f * P.banding));
   // Cleavage: ridged noise squeezed across the layers, thresholded into thin lines.
   const float2 rq = (float2)(q.x * 1.5f, q.y * 6.0f);
   const float r = pt_ridged(rq, w * 6.0f, 4, 2.0f, 0.5f, pt_subseed(seed, 2u));
