@@ -12,27 +12,28 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 q = (float2)(p.x * n, p.y * n / P.aspect);  // one stitch is 1 x 1 here
   const float w = fw * n / fmin(P.aspect, 1.0f);
   const float2 cell = floor(q);
-  const float2 f = q - cell - (float2)(0.5f, 0.0f);
-  // Each stitch is two legs of a V (pointing down) spanning about 1.5 rows; check this row and
-  // the row above (its legs hang into this one). Keep the nearest leg (and its shading).
-  const float r = 0.5f * P.thickness * 0.62f;
-  float best = 1e9f, across = 0.0f;
+  // Each stitch is a V of two tilted, lens-shaped legs that meet at the bottom and spill a little
+  // into the rows above and below; keep the leg whose outline is nearest (deepest inside).
+  const float hl = 0.62f, hw = 0.5f * P.thickness * 0.62f;
+  const float2 axis = (float2)(0.40f, 0.916f);  // leg direction, leaning outwards at the top
+  float best = 1e9f, across = 0.0f, along = 0.0f;
   int bx = (int)cell.x, by = (int)cell.y;
-  for (int dy = 0; dy <= 1; ++dy) {
-    const float2 g = f + (float2)(0.0f, (float)dy);  // position relative to stitch (cell.y - dy)
-    const float2 a0 = (float2)(-0.3f, -0.1f), b0 = (float2)(-0.04f, 1.0f);
-    const float2 a1 = (float2)(0.3f, -0.1f), b1 = (float2)(0.04f, 1.0f);
-    const float d0 = pt_sd_segment(g, a0, b0), d1 = pt_sd_segment(g, a1, b1);
-    const float d = fmin(d0, d1);
-    if (d < best) { best = d; by = (int)cell.y - dy; }
-  }
-  const float dist = best - r;
-  const float cover = pt_coverage(dist, w);
-  const float x = clamp(best / r, 0.0f, 1.0f);
-  const float dw = pt_detail_weight(0.5f / w);
-  const float shade_ = mix(0.75f, 1.0f - 0.6f * x * x, dw);
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int side = 0; side <= 1; ++side) {
+      const float sx = side ? 1.0f : -1.0f;
+      const float2 c = cell + (float2)(0.5f + sx * 0.2f, 0.5f + (float)dy);
+      const float2 d = q - c;
+      const float2 ax = (float2)(-sx * axis.x, axis.y);           // along the leg (screen y down)
+      const float2 l = (float2)(d.x * ax.y - d.y * ax.x, dot(d, ax));
+      const float sd = pt_sd_leaf(l, hl, hw);
+      if (sd < best) { best = sd; across = l.x / hw; along = l.y / hl; by = (int)cell.y + dy; }
+    }
+  const float cover = pt_coverage(best, w);
+  const float dw = pt_detail_weight(hw / w);
+  const float x2 = clamp(across * across, 0.0f, 1.0f);
+  const float shade_ = mix(0.78f, (1.0f - 0.55f * x2) * (1.0f - 0.3f * along * along), dw);
   float3 c = pt_vary_color(P.color, P.variation, pt_rand(bx, by, 0, seed), pt_rand(bx, by, 1, seed));
-  // Twist: stripes slanted along each leg, plus fuzz.
+  // Twist of the yarn and fuzz.
   const float tw = pt_fbm(q * 6.0f, w * 6.0f, 3, 2.0f, 0.5f, pt_subseed(seed, 2u));
   c *= shade_ * (1.0f + 0.5f * P.fuzz * tw);
   return pt_saturate3(mix(P.gap_color * (1.0f + 0.5f * tw), c, cover));
