@@ -18,7 +18,7 @@ float3 star_layer(float2 p, float fw, uint seed, float n, float radius, float pe
   const float2 q = p * n;
   const float2 base = floor(q - 0.5f);
   const float w = fw * n;                          // pixel footprint in cell units
-  const float s0 = fmin(radius * n, 0.05f);        // core radius in cell units
+  const float s0 = fmin(radius * n, 0.12f);        // core radius in cell units
   const float s2 = fmin(s0 * s0 + 0.08f * w * w, 0.0278f);  // widened, support 3 s <= 0.5
   const float g2 = fmin(16.0f * s0 * s0 + 0.08f * w * w, 0.2025f);  // halo, support <= 0.45
   float3 sum = (float3)(0.0f);
@@ -31,7 +31,7 @@ float3 star_layer(float2 p, float fw, uint seed, float n, float radius, float pe
       if (elong > 0.0f) {
         // Random orientation and axis ratio from the star's own random numbers (area kept).
         const float2 dir = normalize((float2)(pt_fract(f.z * 13.7f), pt_fract(f.w * 17.3f)) - 0.5f + 1e-4f);
-        stretch = 1.0f + 2.5f * elong * pt_fract(f.z * 7.31f + f.w * 3.17f);
+        stretch = 1.0f + 1.2f * elong * pt_fract(f.z * 7.31f + f.w * 3.17f);
         d = (float2)(dot(d, dir) / stretch, (d.x * dir.y - d.y * dir.x) * stretch);
       }
       const float r2 = dot(d, d);
