@@ -20,12 +20,13 @@ CompositeMetric::CompositeMetric(std::vector<Component> components, std::string 
   if (components_.empty()) throw Error("a composite metric needs at least one component");
   double total = 0;
   for (const Component& c : components_) {
-    if (!c.metric || !(c.weight > 0)) {
-      throw Error("composite metric component without a metric or with a weight <= 0",
-                  "give every component a metric and a positive weight");
+    if (!c.metric || !(c.weight >= 0)) {
+      throw Error("composite metric component without a metric or with a negative weight",
+                  "give every component a metric and a weight >= 0");
     }
     total += c.weight;
   }
+  if (!(total > 0)) throw Error("composite metric weights are all zero", "give a component a positive weight");
   for (Component& c : components_) {
     c.weight /= total;
     offsets_.push_back(size_);
@@ -77,6 +78,7 @@ double CompositeMetric::distance(std::span<const float> a, std::span<const float
   double d = 0;
   for (std::size_t i = 0; i < components_.size(); ++i) {
     const Metric& m = *components_[i].metric;
+    if (components_[i].weight == 0) continue;  // computed for breakdown(), not ranked by
     d += components_[i].weight * m.distance(slice(a, i), slice(b, i)) / m.scale();
   }
   return d;

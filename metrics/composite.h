@@ -21,7 +21,8 @@ class CompositeMetric final : public Metric {
     double weight = 0;
   };
 
-  // Weights are normalised to sum 1; throws proctex::Error for none or non-positive weights.
+  // Weights are normalised to sum 1; throws proctex::Error for no component, a negative weight or
+  // all weights zero. A zero-weight component is computed (breakdown) but not ranked by.
   explicit CompositeMetric(std::vector<Component> components, std::string id = "composite");
   // spectrum, pyramid, colour, structure with the weights of metrics/calibration.h.
   static std::vector<Component> default_components();
