@@ -1,5 +1,5 @@
 // @shader "Granite: interlocking mineral grains in dark, mid and light tones with mottling"
-// @param float scale       = 50   [10, 120] log       "Grains across the texture"
+// @param float scale       = 30   [10, 120] log       "Grains across the texture"
 // @param color dark_color  = (0.03, 0.03, 0.03)      "Dark mineral (mica, hornblende)"
 // @param color mid_color   = (0.45, 0.30, 0.26)      "Main mineral (feldspar)"
 // @param color light_color = (0.75, 0.74, 0.72)      "Light mineral (quartz)"

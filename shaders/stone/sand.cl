@@ -3,7 +3,7 @@
 // @param float ripple_depth = 0.5  [0, 1]             "Strength of the ripple shading (0: flat sand)"
 // @param float warp         = 0.5  [0, 1]             "Waviness of the ripples"
 // @param float grain        = 0.5  [0, 1]             "Contrast of the individual grains"
-// @param float grain_size   = 2    [1, 4] log       "Grain size in 1/256ths of the texture"
+// @param float grain_size   = 3    [1.5, 6] log       "Grain size in 1/256ths of the texture"
 // @param color color        = (0.62, 0.50, 0.33)      "Sand colour (linear RGB)"
 // @param color shadow_color = (0.40, 0.30, 0.18)      "Colour of the ripple flanks (linear RGB)"
 

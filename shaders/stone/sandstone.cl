@@ -1,5 +1,5 @@
 // @shader "Sandstone: wavy sedimentary strata in a colour ramp with sandy grain"
-// @param float bands    = 10   [2, 50] log          "Strata across the texture"
+// @param float bands    = 10   [2, 30] log          "Strata across the texture"
 // @param float warp     = 0.4  [0, 1]               "Waviness of the strata"
 // @param float tilt     = 0    [-40, 40]            "Tilt of the strata in degrees"
 // @param color color_a  = (0.55, 0.30, 0.15)        "Ramp colour: dark strata"

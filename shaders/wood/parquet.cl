@@ -2,7 +2,7 @@
 // @param int   blocks      = 4    [2, 8]              "Blocks along each side of the texture"
 // @param int   strips      = 4    [2, 8]               "Strips per block"
 // @param float gap         = 0.03 [0.005, 0.15] log    "Gap between strips, fraction of a strip width"
-// @param float rings       = 6    [2, 30] log          "Growth rings per strip width"
+// @param float rings       = 3    [1, 20] log          "Growth rings per strip width"
 // @param float grain       = 0.4  [0, 1]               "Fine grain streaks"
 // @param float variation   = 0.3  [0, 1]               "Strip-to-strip colour variation"
 // @param color light_color = (0.55, 0.35, 0.17)        "Early wood colour (linear RGB)"
