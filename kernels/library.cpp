@@ -12,8 +12,9 @@ namespace proctex::ocl {
 const std::vector<std::pair<std::string, std::string>>& library_files() {
   static const auto ordered = [] {
     // Dependency order: later files call functions of earlier ones.
-    static const std::array<const char*, 5> order = {"hash.cl", "noise.cl", "fractal.cl",
-                                                     "pattern.cl", "color.cl"};
+    // A new library file must be added here; unknown files would go last in name order.
+    static const std::array<const char*, 9> order = {"hash.cl",  "noise.cl", "fractal.cl", "pattern.cl", "color.cl",
+                                                     "sdf.cl",   "tiling.cl", "fabric.cl",  "wood.cl"};
     auto files = embedded::opencl_library_files();
     auto rank = [](const std::string& path) {
       for (size_t i = 0; i < order.size(); ++i)
