@@ -1,7 +1,6 @@
 // proctex match PHOTO: the shader and parameters that reproduce a photo.
 #include <csignal>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -79,15 +78,6 @@ std::map<std::string, nlohmann::json> parse_fixed(const std::vector<std::string>
   return out;
 }
 
-void write_json_file(const std::string& path, const nlohmann::json& j) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!(out << j.dump(2) << "\n")) throw Error("cannot write '" + path + "'", "check the folder exists and is writable");
-  }
-  std::filesystem::rename(tmp, path);
-}
-
 void write_compare(const std::string& path, const Image& target, const Image& match, const search::MatchResult& r) {
   const int side = std::min(512, std::max(match.width, 256));
   const Image t = resize(center_crop_square(target), side, side);
@@ -124,7 +114,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
 
   nlohmann::json j = result.to_json();
   j["target"] = {{"path", o.photo}, {"width", target.width}, {"height", target.height}, {"crop", o.crop}};
-  if (!o.output.empty()) write_json_file(o.output, j);
+  if (!o.output.empty()) write_text_file(o.output, j.dump(2) + "\n");
   if (!o.render.empty() || !o.compare.empty()) {
     Renderer renderer;
     RenderSettings settings;

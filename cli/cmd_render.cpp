@@ -1,7 +1,6 @@
 // proctex render SPEC -o out.png: renders a texture spec at any size.
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 
 #include <fmt/format.h>
 
@@ -29,15 +28,6 @@ struct RenderOptions {
   bool json = false;
 };
 
-void write_text(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!(out << text)) throw Error("cannot write '" + path + "'", "check that the folder exists and is writable");
-  }
-  std::filesystem::rename(tmp, path);
-}
-
 void run(const RenderOptions& o, const GlobalOptions& global) {
   TextureSpec spec = parse_spec_argument(o.spec);
   if (o.seed >= 0) spec.seed = static_cast<uint32_t>(o.seed);
@@ -57,7 +47,7 @@ void run(const RenderOptions& o, const GlobalOptions& global) {
   progress.finish();
   const double render_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   save_image(image, o.output);
-  if (!o.spec_out.empty()) write_text(o.spec_out, full.to_json().dump(2) + "\n");
+  if (!o.spec_out.empty()) write_text_file(o.spec_out, full.to_json().dump(2) + "\n");
 
   if (o.json) {
     print_json({{"output", o.output}, {"width", settings.width}, {"height", settings.height},

@@ -4,8 +4,12 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 
 #include <fmt/format.h>
+
+#include "core/error.h"
 
 namespace proctex::cli {
 
@@ -26,6 +30,19 @@ void print_table(const std::vector<std::vector<std::string>>& rows) {
     }
     std::printf("%s\n", line.c_str());
   }
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!(out << text)) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw Error("cannot write '" + path + "'", "check that the folder exists and is writable");
+    }
+  }
+  std::filesystem::rename(tmp, path);
 }
 
 bool stderr_is_terminal() { return isatty(STDERR_FILENO) != 0; }

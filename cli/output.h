@@ -34,6 +34,9 @@ class Progress {
   std::chrono::steady_clock::time_point last_draw_;
 };
 
+// Writes a text file through a temporary and a rename, so a failed write leaves no half file.
+void write_text_file(const std::string& path, const std::string& text);
+
 // "1.23 s", "45 ms".
 std::string format_seconds(double seconds);
 
