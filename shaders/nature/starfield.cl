@@ -35,6 +35,8 @@ float3 star_layer(float2 p, float fw, uint seed, float n, float radius, float pe
         d = (float2)(dot(d, dir) / stretch, (d.x * dir.y - d.y * dir.x) * stretch);
       }
       const float r2 = dot(d, d);
+      // Beyond both the widest core (c2 <= s2) and the halo this star adds nothing.
+      if (r2 >= fmax(9.0f * s2, glow > 0.0f ? g2 : 0.0f)) continue;
       // Power-law brightness: many faint stars, a few bright ones; bright stars look larger.
       const float b = peak * pt_powr(f.z, spread);
       const float size2 = 0.3f + 0.7f * b / peak;    // bright stars have larger cores
