@@ -34,27 +34,11 @@ PtVoronoi pt_voronoi(float2 p, float jitter, uint seed) {
       const float dd = dot(d, d);
       if (dd < best) { best = dd; mr = d; r.cell = (int2)(bx + dx, by + dy); }
     }
-  // Second pass: the nearest border. The 8 neighbours of the owning cell first, then the outer
-  // ring of 16, skipping a cell when even the nearest position its point can take (a box of side
-  // jitter around the cell centre) is too far: its bisector lies at least (|d| - f1) / 2 away.
   float edge = 1e9f;
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx) {
-      if (dx == 0 && dy == 0) continue;
-      const float2 d = pt_voronoi_point(r.cell.x + dx, r.cell.y + dy, jitter, mixed) - p;
-      const float2 diff = d - mr;
-      const float l2 = dot(diff, diff);
-      if (l2 > 1e-10f) edge = fmin(edge, dot(0.5f * (mr + d), diff) * rsqrt(l2));
-    }
-  const float f1 = sqrt(best);
-  const float hj = 0.5f * jitter;
   for (int dy = -2; dy <= 2; ++dy)
     for (int dx = -2; dx <= 2; ++dx) {
-      if (abs(dx) < 2 && abs(dy) < 2) continue;
       const int cx = r.cell.x + dx, cy = r.cell.y + dy;
-      const float2 c = (float2)((float)cx, (float)cy) + 0.5f - p;
-      const float2 g = fmax(fabs(c) - hj, 0.0f);
-      if (sqrt(dot(g, g)) - f1 >= 2.0f * edge) continue;
+      if (dx == 0 && dy == 0) continue;
       const float2 d = pt_voronoi_point(cx, cy, jitter, mixed) - p;
       const float2 diff = d - mr;
       const float l2 = dot(diff, diff);
