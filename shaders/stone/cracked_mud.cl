@@ -9,27 +9,6 @@
 // @param float variation   = 0.2  [0, 1]             "Plate-to-plate colour variation"
 // @param float roughness   = 0.4  [0, 1]             "Surface texture"
 
-// f2 - f1 of pt_cellular(p, 1, seed), with the seed and row hashes computed once (same values).
-float fine_f2_minus_f1(float2 p, uint seed) {
-  const float2 base = floor(p);
-  const int bx = (int)base.x, by = (int)base.y;
-  const uint hs = pt_hash(seed);
-  float f1 = 1e9f, f2 = 1e9f;
-  for (int dy = -1; dy <= 1; ++dy) {
-    const uint hy = pt_hash((uint)(by + dy) * 0xd8163841U ^ hs);
-    for (int dx = -1; dx <= 1; ++dx) {
-      const int cx = bx + dx;
-      const uint h = pt_hash((uint)cx * 0x8da6b343U ^ hy);
-      const float2 r = (float2)(pt_u01(h), pt_u01(pt_hash(h ^ 0x9e3779b9U)));
-      const float2 d = (float2)((float)cx, (float)(by + dy)) + r - p;
-      const float dist = sqrt(dot(d, d));
-      f2 = dist < f1 ? f1 : fmin(f2, dist);
-      f1 = fmin(f1, dist);
-    }
-  }
-  return f2 - f1;
-}
-
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   float2 q = p * P.scale;
   const float w = fw * P.scale;
@@ -39,7 +18,8 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float plate = pt_coverage(d, w);
   // Secondary cracks: a finer cellular pattern, thinner, only inside plates.
   const float2 q2 = q * 2.7f;
-  const float d2 = 0.25f * P.crack_width * 2.7f - 0.5f * fine_f2_minus_f1(q2, pt_subseed(seed, 2u));
+  const PtCellular c2 = pt_cellular(q2, 1.0f, pt_subseed(seed, 2u));
+  const float d2 = 0.25f * P.crack_width * 2.7f - 0.5f * (c2.f2 - c2.f1);
   const float fine = P.fine_cracks * (1.0f - pt_coverage(d2, w * 2.7f)) * 0.8f;
   float3 mc = pt_vary_color(P.mud_color, P.variation, v.id, pt_rand(v.cell.x, v.cell.y, 1, seed));
   mc *= 1.0f + P.curl * 0.35f * (1.0f - smoothstep(0.0f, 0.2f, -d));
