@@ -89,6 +89,30 @@ CREATE TABLE builds (
   result      TEXT                 -- JSON: per shader status and seconds
 );
 )sql",
+    // 1 -> 2: jump edges between shaders (proctex catalog link, thesis 5.3). A shader's rows
+    // cascade: rebuilding it (delete + insert) drops jump edges found from its old samples.
+    R"sql(
+CREATE TABLE jumps (
+  id          INTEGER PRIMARY KEY,
+  shader_a    INTEGER NOT NULL REFERENCES shaders(id) ON DELETE CASCADE,
+  shader_b    INTEGER NOT NULL REFERENCES shaders(id) ON DELETE CASCADE,
+  packed_a    BLOB NOT NULL,        -- float32 LE, packed vector of shader a
+  packed_b    BLOB NOT NULL,
+  seed_a      INTEGER NOT NULL,
+  seed_b      INTEGER NOT NULL,
+  metric      TEXT NOT NULL,
+  version     INTEGER NOT NULL,
+  resolution  INTEGER NOT NULL,
+  features_a  BLOB NOT NULL,        -- float32 LE, features of the render of packed_a
+  features_b  BLOB NOT NULL,
+  weight      REAL NOT NULL,        -- similarity of the two renders
+  info        TEXT NOT NULL,        -- JSON: start pair, rounds, renders
+  created_at  TEXT NOT NULL,
+  CHECK (shader_a <> shader_b)
+);
+CREATE INDEX jumps_a ON jumps(shader_a);
+CREATE INDEX jumps_b ON jumps(shader_b);
+)sql",
 };
 static_assert(std::size(kMigrations) == kSchemaVersion);
 
@@ -150,7 +174,7 @@ void Store::check_and_migrate(bool writable) {
                     ", newer than this proctex supports (" + std::to_string(kSchemaVersion) + ")",
                 "use the proctex release that wrote it, or build a new catalogue with another --db; the file was not changed");
   if (!writable) {
-    if (version < kSchemaVersion)
+    if (version < kMinReadableVersion)
       throw Error("catalogue '" + path_.string() + "' has the older schema version " + std::to_string(version),
                   "run 'proctex catalog build --db " + path_.string() + "' once to migrate it");
     db_->exec("PRAGMA foreign_keys = ON");
@@ -349,11 +373,88 @@ void Store::remove(const std::string& shader) {
   if (!q.step()) return;
   const int64_t id = q.column_int(0);
   // Children first, explicitly: cheaper than cascading row by row.
+  auto j = db_->prepare("DELETE FROM jumps WHERE shader_a = ?1 OR shader_b = ?1");
+  j.bind(1, id);
+  j.run();
   for (const char* table : {"edges", "graph_members", "features", "samples", "shaders"}) {
     auto d = db_->prepare(std::string("DELETE FROM ") + table + (std::string(table) == "shaders" ? " WHERE id = ?1" : " WHERE shader_id = ?1"));
     d.bind(1, id);
     d.run();
   }
+}
+
+namespace {
+
+int64_t shader_id(sql::Connection& db, const std::string& shader, const std::filesystem::path& path) {
+  auto q = db.prepare("SELECT id FROM shaders WHERE name = ?1");
+  q.bind(1, shader);
+  if (!q.step())
+    throw UsageError("shader '" + shader + "' is not in catalogue '" + path.string() + "'",
+                     "build it first: proctex catalog build --db " + path.string() + " --shaders " + shader);
+  return q.column_int(0);
+}
+
+}  // namespace
+
+void Store::write_jumps(const std::string& a, const std::string& b, const std::vector<JumpEdge>& jumps) {
+  if (a == b) throw UsageError("a jump edge joins two different shaders, got '" + a + "' twice");
+  const std::string lo = std::min(a, b), hi = std::max(a, b);
+  const int64_t ida = shader_id(*db_, lo, path_), idb = shader_id(*db_, hi, path_);
+  sql::Transaction t(*db_);
+  auto del = db_->prepare("DELETE FROM jumps WHERE shader_a = ?1 AND shader_b = ?2");
+  del.bind(1, ida).bind(2, idb);
+  del.run();
+  auto ins = db_->prepare(
+      "INSERT INTO jumps (shader_a, shader_b, packed_a, packed_b, seed_a, seed_b, metric, version, resolution, "
+      "features_a, features_b, weight, info, created_at) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
+  for (JumpEdge e : jumps) {
+    if (e.shader_a != lo) {  // store in name order
+      std::swap(e.shader_a, e.shader_b);
+      std::swap(e.packed_a, e.packed_b);
+      std::swap(e.seed_a, e.seed_b);
+      std::swap(e.features_a, e.features_b);
+    }
+    if (e.shader_a != lo || e.shader_b != hi)
+      throw Error("jump edge " + e.shader_a + " - " + e.shader_b + " written as " + lo + " - " + hi + " (bug)");
+    if (e.features_a.metric != e.features_b.metric || e.features_a.version != e.features_b.version ||
+        e.features_a.resolution != e.features_b.resolution)
+      throw Error("jump edge features of " + lo + " and " + hi + " come from different metrics (bug)");
+    ins.bind(1, ida).bind(2, idb).bind_blob(3, sql::floats_to_blob(e.packed_a)).bind_blob(4, sql::floats_to_blob(e.packed_b))
+        .bind(5, static_cast<int64_t>(e.seed_a)).bind(6, static_cast<int64_t>(e.seed_b)).bind(7, e.features_a.metric)
+        .bind(8, e.features_a.version).bind(9, e.features_a.resolution)
+        .bind_blob(10, sql::floats_to_blob(e.features_a.values)).bind_blob(11, sql::floats_to_blob(e.features_b.values))
+        .bind(12, e.similarity).bind(13, e.info.dump()).bind(14, now_utc());
+    ins.run();
+  }
+  t.commit();
+}
+
+std::vector<JumpEdge> Store::jumps(const std::string& shader) {
+  std::vector<JumpEdge> out;
+  if (schema_version() < 2) return out;  // a v1 file read without migrating: no jump edges yet
+  auto s = db_->prepare(
+      "SELECT sa.name, sb.name, j.packed_a, j.packed_b, j.seed_a, j.seed_b, j.metric, j.version, j.resolution, "
+      "j.features_a, j.features_b, j.weight, j.info FROM jumps j JOIN shaders sa ON sa.id = j.shader_a "
+      "JOIN shaders sb ON sb.id = j.shader_b WHERE ?1 = '' OR sa.name = ?1 OR sb.name = ?1 ORDER BY sa.name, sb.name, j.id");
+  s.bind(1, shader);
+  while (s.step()) {
+    JumpEdge e;
+    e.shader_a = s.column_text(0);
+    e.shader_b = s.column_text(1);
+    e.packed_a = sql::blob_to_floats(s.column_blob(2));
+    e.packed_b = sql::blob_to_floats(s.column_blob(3));
+    e.seed_a = static_cast<uint32_t>(s.column_int(4));
+    e.seed_b = static_cast<uint32_t>(s.column_int(5));
+    const std::string metric = s.column_text(6);
+    const int version = static_cast<int>(s.column_int(7)), resolution = static_cast<int>(s.column_int(8));
+    e.features_a = {metric, version, resolution, sql::blob_to_floats(s.column_blob(9))};
+    e.features_b = {metric, version, resolution, sql::blob_to_floats(s.column_blob(10))};
+    e.similarity = s.column_double(11);
+    e.info = parse_json(s.column_text(12));
+    out.push_back(std::move(e));
+  }
+  return out;
 }
 
 int64_t Store::begin_build(const nlohmann::json& info) {

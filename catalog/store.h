@@ -19,7 +19,10 @@
 
 namespace proctex::catalog {
 
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
+// Oldest schema a reader accepts without migrating (v2 only added the jumps table, so a v1 file is
+// read as a catalogue without jump edges; opening it for writing migrates it).
+inline constexpr int kMinReadableVersion = 1;
 inline constexpr int kApplicationId = 0x50545843;  // "PTXC"
 
 namespace sql {
@@ -37,6 +40,18 @@ struct ShaderSummary {
   double build_seconds = 0;
   std::optional<Coverage> coverage;
   nlohmann::json settings, stats;
+};
+
+// A jump edge between two shaders (thesis section 5.3): one parameter vector per shader whose
+// renders look alike, found by `proctex catalog link` (transform/jumps.h). The features are stored
+// so that the joined graph of a morph needs no render; they are tagged like sample features.
+struct JumpEdge {
+  std::string shader_a, shader_b;  // shader_a < shader_b by name
+  std::vector<float> packed_a, packed_b;
+  uint32_t seed_a = 0, seed_b = 0;
+  metrics::Features features_a, features_b;
+  double similarity = 0;  // edge weight: S(p_a(packed_a), p_b(packed_b))
+  nlohmann::json info = nlohmann::json::object();  // how it was found (start, rounds, renders)
 };
 
 class Store {
@@ -62,6 +77,13 @@ class Store {
   // Replaces the shader's rows in one transaction.
   void write(const ShaderCatalogue& cat, const std::string& device, double seconds);
   void remove(const std::string& shader);
+
+  // Jump edges (schema v2). write_jumps replaces every jump edge of the pair {a, b} in one
+  // transaction (both shaders must be catalogued). Rebuilding or removing a shader deletes its
+  // jump edges (they were found from its old samples). jumps() returns the edges touching
+  // `shader` (all when empty), none for a v1 file.
+  void write_jumps(const std::string& a, const std::string& b, const std::vector<JumpEdge>& jumps);
+  std::vector<JumpEdge> jumps(const std::string& shader = {});
 
   // Build log: one row per `catalog build` / `catalog merge` run.
   int64_t begin_build(const nlohmann::json& info);

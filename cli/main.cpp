@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
 #ifdef PROCTEX_HAVE_CATALOG
   cli::add_catalog_command(app, global);
   cli::add_match_command(app, global);
+  cli::add_catalog_link_command(*app.get_subcommand("catalog"), global);
+  cli::add_morph_command(app, global);
 #endif
 
   app.parse_complete_callback([&] {

@@ -1,0 +1,355 @@
+// Transformation tests: power-cost paths, the morph space, jump-edge storage (schema v2), morphs
+// within and across shaders on tiny real catalogues (real PoCL renders, real SQLite files).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "catalog/catalog.h"
+#include "catalog/sqlite.h"
+#include "core/error.h"
+#include "metrics/metric.h"
+#include "shaders/library.h"
+#include "tests/support/temp_dir.h"
+#include "transform/jumps.h"
+#include "transform/morph.h"
+#include "transform/path.h"
+#include "transform/space.h"
+
+namespace proctex::transform {
+namespace {
+
+namespace fs = std::filesystem;
+using proctex::testing::TempDir;
+
+// ---------------------------------------------------------------------------------------------
+// Paths (no device)
+
+TEST(PowerPath, LargerPowerPrefersMoreSmallerSteps) {
+  // 0 -> 2 directly (dissimilarity 0.8) or through 1 in two steps of 0.5.
+  Graph g(3);
+  g.add_edge(0, 2, 0.8);
+  g.add_edge(0, 1, 0.5);
+  g.add_edge(1, 2, 0.5);
+  const auto p1 = shortest_path(g, 0, 2, 1.0);  // sum: 0.8 < 1.0
+  ASSERT_TRUE(p1);
+  EXPECT_EQ(p1->vertices, (std::vector<int>{0, 2}));
+  EXPECT_NEAR(p1->cost, 0.8, 1e-12);
+  const auto p3 = shortest_path(g, 0, 2, 3.0);  // 0.125 + 0.125 < 0.512
+  ASSERT_TRUE(p3);
+  EXPECT_EQ(p3->vertices, (std::vector<int>{0, 1, 2}));
+  EXPECT_NEAR(p3->cost, std::cbrt(0.25), 1e-12);  // eq 5.1: (e1^n + e2^n)^(1/n)
+}
+
+TEST(PowerPath, UnreachableAndBadPower) {
+  Graph g(3);
+  g.add_edge(0, 1, 0.1);
+  EXPECT_FALSE(shortest_path(g, 0, 2, 3.0));
+  EXPECT_THROW(shortest_path(g, 0, 1, 0.5), UsageError);
+}
+
+TEST(MorphSpaceTest, DiscreteParametersMoveInWholeValues) {
+  const ShaderDecl& decl = ShaderLibrary::builtin().get("bricks");
+  const MorphSpace sp(decl);
+  const ParamDecl* rows = decl.find("rows");
+  ASSERT_NE(rows, nullptr);
+  ASSERT_EQ(rows->type, ParamType::Int);
+  auto a = decl.default_packed(), b = a;
+  a[rows->offset] = rows->min;
+  b[rows->offset] = rows->min + 10;
+  EXPECT_EQ(sp.max_discrete_step(a, b), 10);
+  for (int k = 0; k <= 20; ++k) {
+    const auto m = sp.lerp(a, b, k / 20.0);
+    EXPECT_EQ(m[rows->offset], std::round(m[rows->offset])) << "t = " << k / 20.0;
+    EXPECT_GE(m[rows->offset], a[rows->offset]);
+    EXPECT_LE(m[rows->offset], b[rows->offset]);
+  }
+  EXPECT_EQ(sp.lerp(a, b, 0), a);
+  EXPECT_EQ(sp.lerp(a, b, 1), b);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A tiny catalogue shared by the tests below (built once: ~10 s).
+
+catalog::SamplingSettings tiny() {
+  catalog::SamplingSettings s;
+  s.samples = 14;
+  s.resolution = 64;
+  s.screen_resolution = 64;
+  s.thumbnail = 32;
+  s.probes = 0;
+  s.max_iterations = 1;
+  return s;
+}
+
+LinkOptions quick_link() {
+  LinkOptions o;
+  o.jumps = 2;
+  o.rounds = 1;
+  o.evaluations = 12;
+  o.resolution = 64;
+  return o;
+}
+
+class Transform : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    catalog::BuildOptions o;
+    o.db = db();
+    o.shaders = {"bricks", "circle", "polkadots", "rectangle", "superellipse"};
+    o.settings = tiny();
+    o.seed = 5;
+    o.jobs = 2;
+    catalog::build(o);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static fs::path db() { return *dir_ / "cat.sqlite"; }
+  // A copy of the shared catalogue that a test may change.
+  static fs::path copy_db(const std::string& name) {
+    catalog::Store(db(), catalog::Store::Access::Write);  // checkpoint the WAL into the file
+    const fs::path p = *dir_ / name;
+    fs::remove(p);
+    fs::copy_file(db(), p);
+    return p;
+  }
+  static TempDir* dir_;
+  Renderer renderer_;
+};
+TempDir* Transform::dir_ = nullptr;
+
+MorphOptions quick(int frames) {
+  MorphOptions o;
+  o.frames = frames;
+  o.threshold = 0.8;
+  o.max_depth = 3;
+  o.max_renders = 120;
+  o.jobs = 2;
+  return o;
+}
+
+TextureSpec spec(const std::string& text) { return parse_spec_argument(text); }
+
+void expect_same_texture(const TextureSpec& frame, const TextureSpec& input) {
+  const ShaderDecl& decl = ShaderLibrary::builtin().get(input.shader);
+  EXPECT_EQ(frame.shader, input.shader);
+  EXPECT_EQ(resolve(decl, frame), resolve(decl, input));
+  EXPECT_EQ(frame.seed, input.seed);
+}
+
+TEST_F(Transform, WithinShaderEndsOnTheInputsAndEveryEdgeMeetsTheThresholdOrIsReported) {
+  const auto a = spec("bricks:rows=4,mortar=0.03,seed=3"), b = spec("bricks:rows=20,mortar=0.2,seed=3");
+  catalog::Store store(db(), catalog::Store::Access::Read);
+  const Morph m = plan({a, b}, store, renderer_, quick(24));
+  ASSERT_EQ(m.frames.size(), 24u);
+  expect_same_texture(m.frames.front().spec, a);
+  expect_same_texture(m.frames.back().spec, b);
+  EXPECT_EQ(m.frames.front().key, 0);
+  EXPECT_EQ(m.frames.back().key, 1);
+  EXPECT_EQ(m.jumps, 0);
+  EXPECT_EQ(m.shaders, std::vector<std::string>{"bricks"});
+  int reported = 0;
+  for (size_t i = 0; i + 1 < m.path.size(); ++i) {
+    if (m.path[i].similarity < 0.8) {
+      EXPECT_FALSE(m.path[i].reached) << "edge " << i << " below the threshold but not reported";
+      EXPECT_FALSE(m.path[i].note.empty());
+      ++reported;
+    } else {
+      EXPECT_TRUE(m.path[i].reached);
+    }
+  }
+  EXPECT_EQ(static_cast<int>(m.unreached().size()), reported);
+  EXPECT_EQ(m.unreached_count(), reported);
+  // Seed and domain fixed along the path; positions increase.
+  const ShaderDecl& decl = ShaderLibrary::builtin().get("bricks");
+  const ParamDecl* rows = decl.find("rows");
+  for (size_t i = 0; i < m.frames.size(); ++i) {
+    EXPECT_EQ(m.frames[i].spec.seed, 3u);
+    const float r = resolve(decl, m.frames[i].spec)[rows->offset];
+    EXPECT_EQ(r, std::round(r)) << "frame " << i << " has a non-integer row count";
+    if (i > 0) EXPECT_GE(m.frames[i].position, m.frames[i - 1].position);
+  }
+}
+
+TEST_F(Transform, KeyTexturesAppearInOrder) {
+  const std::vector<TextureSpec> keys = {spec("bricks:rows=6,seed=1"), spec("bricks:rows=12,mortar=0.15,seed=1"),
+                                         spec("bricks:rows=16,seed=1")};
+  catalog::Store store(db(), catalog::Store::Access::Read);
+  const Morph m = plan(keys, store, renderer_, quick(30));
+  ASSERT_EQ(m.frames.size(), 30u);
+  std::vector<int> seen;
+  for (const auto& f : m.frames)
+    if (f.key >= 0) seen.push_back(f.key);
+  ASSERT_EQ(seen, (std::vector<int>{0, 1, 2}));
+  for (const auto& f : m.frames)
+    if (f.key >= 0) expect_same_texture(f.spec, keys[f.key]);
+}
+
+TEST_F(Transform, FramesAreEvenInPerceptualDistanceAndBeatLinearInterpolation) {
+  const auto a = spec("bricks:rows=3,mortar=0.02,seed=2"), b = spec("bricks:rows=24,mortar=0.25,seed=2");
+  catalog::Store store(db(), catalog::Store::Access::Read);
+  Morph m = plan({a, b}, store, renderer_, quick(32));
+  m.quality = measure(m.frames, renderer_, m.resolution, 2);
+  auto lin = linear_frames({a, b}, 32, renderer_.library());
+  ASSERT_EQ(lin.size(), 32u);
+  expect_same_texture(lin.front().spec, a);
+  expect_same_texture(lin.back().spec, b);
+  m.linear = measure(lin, renderer_, m.resolution, 2);
+  EXPECT_EQ(m.quality->frames, 32);
+  EXPECT_GT(m.quality->layout_mean, 0.0);
+  EXPECT_LT(m.quality->max_dissimilarity, m.linear->max_dissimilarity)
+      << "morph " << m.quality->to_json() << " linear " << m.linear->to_json();
+  EXPECT_TRUE(m.quality_json()["beats_linear_on_max"].get<bool>());
+}
+
+TEST_F(Transform, TooFewFramesAndBadInputsAreUsageErrors) {
+  catalog::Store store(db(), catalog::Store::Access::Read);
+  EXPECT_THROW(plan({spec("bricks")}, store, renderer_, quick(10)), UsageError);
+  EXPECT_THROW(plan({spec("bricks"), spec("bricks:rows=9")}, store, renderer_, quick(1)), UsageError);
+  // A shader that is not catalogued: a clear error naming the fix.
+  try {
+    plan({spec("marble"), spec("marble:seed=4")}, store, renderer_, quick(10));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.message()).find("not in catalogue"), std::string::npos) << e.message();
+  }
+}
+
+TEST_F(Transform, UnreachableShadersGiveAClearError) {
+  catalog::Store store(db(), catalog::Store::Access::Read);
+  try {
+    plan({spec("polkadots"), spec("circle")}, store, renderer_, quick(10));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.message()).find("no jump edges connect"), std::string::npos) << e.message();
+    EXPECT_NE(e.hint().find("catalog link --shaders polkadots,circle"), std::string::npos) << e.hint();
+  }
+}
+
+TEST_F(Transform, CrossShaderSequenceUsesAJumpEdge) {
+  const fs::path p = copy_db("jump.sqlite");
+  {
+    catalog::Store store(p, catalog::Store::Access::Write);
+    const auto pairs = choose_pairs(store, {"rectangle", "superellipse"}, quick_link());
+    ASSERT_EQ(pairs.size(), 1u);
+    const auto r = link(store, pairs, quick_link(), renderer_);
+    ASSERT_EQ(r.pairs.size(), 1u);
+    const auto jumps = store.jumps("rectangle");
+    ASSERT_EQ(jumps.size(), 2u);
+    for (const auto& j : jumps) {
+      EXPECT_EQ(j.shader_a, "rectangle");
+      EXPECT_EQ(j.shader_b, "superellipse");
+      EXPECT_GT(j.similarity, 0.0);
+      // The stored weight is the similarity of the stored features.
+      EXPECT_NEAR(metrics::default_metric().similarity(j.features_a, j.features_b), j.similarity, 1e-9);
+    }
+  }
+  catalog::Store store(p, catalog::Store::Access::Read);
+  const auto a = spec("rectangle:width=0.5,height=0.5"), b = spec("superellipse:exponent=2");
+  MorphOptions o = quick(20);
+  o.dissolve = 2;
+  const Morph m = plan({a, b}, store, renderer_, o);
+  ASSERT_EQ(m.frames.size(), 20u);
+  EXPECT_EQ(m.jumps, 1);
+  EXPECT_EQ(m.shaders, (std::vector<std::string>{"rectangle", "superellipse"}));
+  expect_same_texture(m.frames.front().spec, a);
+  expect_same_texture(m.frames.back().spec, b);
+  int jump_frames = 0, dissolves = 0;
+  for (size_t i = 1; i < m.frames.size(); ++i) {
+    jump_frames += m.frames[i].jump;
+    dissolves += m.frames[i].blend_to.has_value();
+    if (!m.frames[i].blend_to && !m.frames[i].jump && m.frames[i - 1].blend_to == std::nullopt)
+      EXPECT_EQ(m.frames[i].spec.shader, m.frames[i - 1].spec.shader) << "shader changes only at the jump";
+  }
+  EXPECT_EQ(jump_frames, 1);
+  EXPECT_EQ(dissolves, 2);
+  // Subdivision never crosses the jump edge: the waypoints on both sides keep their shaders.
+  for (size_t i = 0; i + 1 < m.path.size(); ++i)
+    if (m.path[i].shader != m.path[i + 1].shader) EXPECT_TRUE(m.path[i].jump);
+}
+
+TEST_F(Transform, ConnectiveShaderCarriesRectangleToCircle) {
+  // Only rectangle - superellipse and superellipse - circle are linked: the path has to pass
+  // through the superellipse (thesis fig 5-12).
+  const fs::path p = copy_db("connective.sqlite");
+  {
+    catalog::Store store(p, catalog::Store::Access::Write);
+    link(store, {{"rectangle", "superellipse"}, {"circle", "superellipse"}}, quick_link(), renderer_);
+  }
+  catalog::Store store(p, catalog::Store::Access::Read);
+  const Morph m = plan({spec("rectangle"), spec("circle")}, store, renderer_, quick(24));
+  EXPECT_EQ(m.shaders, (std::vector<std::string>{"rectangle", "superellipse", "circle"}));
+  EXPECT_EQ(m.jumps, 2);
+  // Without connective shaders the same request has no direct edge.
+  MorphOptions direct = quick(24);
+  direct.connective = false;
+  EXPECT_THROW(plan({spec("rectangle"), spec("circle")}, store, renderer_, direct), Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Jump-edge storage: schema v2 and its migration
+
+TEST_F(Transform, JumpEdgesRoundTripAndGoWithARebuiltShader) {
+  const fs::path p = copy_db("store.sqlite");
+  catalog::Store store(p, catalog::Store::Access::Write);
+  EXPECT_EQ(store.schema_version(), 2);
+  catalog::JumpEdge e;
+  e.shader_a = "superellipse";  // given out of name order: stored as rectangle - superellipse
+  e.shader_b = "rectangle";
+  const auto sa = store.load("superellipse", false), ra = store.load("rectangle", false);
+  e.packed_a = sa.samples[0].packed;
+  e.packed_b = ra.samples[1].packed;
+  e.features_a = sa.samples[0].features;
+  e.features_b = ra.samples[1].features;
+  e.seed_a = 11;
+  e.seed_b = 22;
+  e.similarity = 0.25;
+  store.write_jumps("superellipse", "rectangle", {e});
+  store.write_jumps("superellipse", "rectangle", {e});  // replaces, never duplicates
+  auto j = store.jumps();
+  ASSERT_EQ(j.size(), 1u);
+  EXPECT_EQ(j[0].shader_a, "rectangle");
+  EXPECT_EQ(j[0].packed_a, ra.samples[1].packed);
+  EXPECT_EQ(j[0].packed_b, sa.samples[0].packed);
+  EXPECT_EQ(j[0].seed_a, 22u);
+  EXPECT_EQ(j[0].features_b.values, sa.samples[0].features.values);
+  EXPECT_DOUBLE_EQ(j[0].similarity, 0.25);
+  EXPECT_TRUE(store.jumps("circle").empty());
+  EXPECT_THROW(store.write_jumps("rectangle", "marble", {}), UsageError);
+  EXPECT_TRUE(store.integrity_problems().empty());
+  // Rewriting a shader (a rebuild) drops the jump edges found from its old samples.
+  store.write(store.load("rectangle"), "test", 0.0);
+  EXPECT_TRUE(store.jumps().empty());
+}
+
+TEST_F(Transform, VersionOneFilesStayReadableAndMigrate) {
+  // A v1 file is exactly a v2 file without the jumps table.
+  const fs::path p = copy_db("v1.sqlite");
+  std::map<std::string, std::string> before;
+  {
+    catalog::sql::Connection c(p, catalog::sql::Connection::Mode::ReadWrite);
+    c.exec("DROP TABLE jumps; PRAGMA user_version = 1");
+  }
+  {
+    catalog::Store r(p, catalog::Store::Access::Read);
+    EXPECT_EQ(r.schema_version(), 1);
+    EXPECT_TRUE(r.jumps().empty());
+    for (const auto& s : r.shaders()) before[s.name] = s.content_hash;
+    EXPECT_EQ(static_cast<int>(r.load("bricks").samples.size()), r.summary("bricks")->samples);
+  }
+  {
+    catalog::sql::Connection c(p, catalog::sql::Connection::Mode::ReadOnly);
+    EXPECT_EQ(c.scalar_int("PRAGMA user_version"), 1) << "reading must not migrate";
+  }
+  catalog::Store w(p, catalog::Store::Access::Write);
+  EXPECT_EQ(w.schema_version(), catalog::kSchemaVersion);
+  for (const auto& s : w.shaders()) EXPECT_EQ(before[s.name], s.content_hash) << s.name;
+  for (const auto& s : w.shaders()) EXPECT_TRUE(w.consistency_problems(s.name).empty()) << s.name;
+  EXPECT_TRUE(w.integrity_problems().empty());
+}
+
+}  // namespace
+}  // namespace proctex::transform

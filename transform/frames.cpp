@@ -1,0 +1,200 @@
+#include "transform/frames.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <thread>
+
+#include "core/error.h"
+
+namespace proctex::transform {
+
+nlohmann::json Frame::to_json() const {
+  nlohmann::json j = {{"spec", spec.to_json()}, {"position", position}};
+  if (blend_to) {
+    j["dissolve"] = {{"to", blend_to->to_json()}, {"blend", blend}};
+  }
+  if (key >= 0) j["key"] = key;
+  if (jump) j["jump"] = true;
+  j["similarity_to_previous"] = std::isnan(similarity) ? nlohmann::json() : nlohmann::json(similarity);
+  j["layout_difference_to_previous"] = std::isnan(layout) ? nlohmann::json() : nlohmann::json(layout);
+  return j;
+}
+
+nlohmann::json Quality::to_json() const {
+  return {{"frames", frames},
+          {"max_dissimilarity", max_dissimilarity},
+          {"mean_dissimilarity", mean_dissimilarity},
+          {"worst_step", worst_step},
+          {"layout_mean", layout_mean},
+          {"layout_max", layout_max}};
+}
+
+void parallel_for(size_t n, int jobs, const std::function<void(size_t)>& fn) {
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const size_t threads = std::min<size_t>(jobs > 0 ? jobs : hw, n);
+  if (threads <= 1) {
+    for (size_t i = 0; i < n; ++i) fn(i);
+    return;
+  }
+  std::atomic<size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex m;
+  auto worker = [&] {
+    for (size_t i; (i = next++) < n;) {
+      try {
+        fn(i);
+      } catch (...) {
+        std::lock_guard lock(m);
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+std::vector<metrics::Features> render_features(Renderer& renderer, const ShaderDecl& decl,
+                                               const std::vector<std::vector<float>>& packed,
+                                               const std::vector<uint32_t>& seeds, int resolution, int jobs) {
+  RenderSettings rs;
+  rs.width = rs.height = resolution;
+  const auto images = renderer.render_batch(decl, packed, seeds, rs);
+  std::vector<metrics::Features> out(images.size());
+  const auto& metric = metrics::default_metric();
+  parallel_for(images.size(), jobs, [&](size_t i) { out[i] = metric.features(images[i], resolution); });
+  return out;
+}
+
+std::vector<Image> render_frames(const std::vector<Frame>& frames, size_t first, size_t count, Renderer& renderer,
+                                 const RenderSettings& settings) {
+  // Every render this range needs, grouped by shader so each shader is one launch (render_batch
+  // splits large ones itself).
+  struct Job {
+    size_t frame;
+    bool second;  // the blend_to end of a dissolve frame
+  };
+  std::map<std::string, std::vector<Job>> jobs;
+  const size_t end = std::min(frames.size(), first + count);
+  for (size_t f = first; f < end; ++f) {
+    jobs[frames[f].spec.shader].push_back({f, false});
+    if (frames[f].blend_to) jobs[frames[f].blend_to->shader].push_back({f, true});
+  }
+  std::vector<Image> a(end - first), b(end - first);
+  for (const auto& [shader, list] : jobs) {
+    const ShaderDecl& decl = renderer.library().get(shader);
+    std::vector<std::vector<float>> packed;
+    std::vector<uint32_t> seeds;
+    for (const auto& j : list) {
+      const TextureSpec& s = j.second ? *frames[j.frame].blend_to : frames[j.frame].spec;
+      packed.push_back(resolve(decl, s));
+      seeds.push_back(s.seed);
+    }
+    auto images = renderer.render_batch(decl, packed, seeds, settings);
+    for (size_t k = 0; k < list.size(); ++k) (list[k].second ? b : a)[list[k].frame - first] = std::move(images[k]);
+  }
+  for (size_t f = first; f < end; ++f) {
+    const Frame& fr = frames[f];
+    if (!fr.blend_to) continue;
+    Image& out = a[f - first];
+    const Image& other = b[f - first];
+    const float t = static_cast<float>(fr.blend);
+    for (size_t i = 0; i < out.pixels.size(); ++i) out.pixels[i] += t * (other.pixels[i] - out.pixels[i]);
+  }
+  return a;
+}
+
+double layout_difference(const Image& a, const Image& b) {
+  if (a.width != b.width || a.height != b.height || a.pixels.empty()) return 0;
+  double s = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i)
+    s += std::fabs(linear_to_srgb(std::clamp(a.pixels[i], 0.0f, 1.0f)) - linear_to_srgb(std::clamp(b.pixels[i], 0.0f, 1.0f)));
+  return s / static_cast<double>(a.pixels.size());
+}
+
+Quality measure(std::vector<Frame>& frames, Renderer& renderer, int resolution, int jobs, std::vector<Image>* keep,
+                int keep_size, const std::function<void(double)>& progress) {
+  RenderSettings rs;
+  rs.width = rs.height = resolution;
+  const auto& metric = metrics::default_metric();
+  Quality q;
+  q.frames = static_cast<int>(frames.size());
+  if (keep) keep->assign(frames.size(), Image());
+  metrics::Features previous;
+  Image previous_image;
+  const size_t chunk = 32;
+  double sum = 0;
+  int steps = 0;
+  for (size_t first = 0; first < frames.size(); first += chunk) {
+    auto images = render_frames(frames, first, chunk, renderer, rs);
+    std::vector<metrics::Features> features(images.size());
+    parallel_for(images.size(), jobs, [&](size_t i) {
+      features[i] = metric.features(images[i], resolution);
+      if (keep) (*keep)[first + i] = resize(images[i], keep_size, keep_size);
+    });
+    for (size_t i = 0; i < images.size(); ++i) {
+      Frame& f = frames[first + i];
+      if (first + i > 0) {
+        f.similarity = metric.similarity(previous, features[i]);
+        f.layout = layout_difference(previous_image, images[i]);
+        const double d = 1 - f.similarity;
+        sum += d;
+        ++steps;
+        if (d > q.max_dissimilarity || q.worst_step < 0) {
+          q.max_dissimilarity = d;
+          q.worst_step = static_cast<int>(first + i);
+        }
+        q.layout_mean += f.layout;
+        q.layout_max = std::max(q.layout_max, f.layout);
+      }
+      previous = std::move(features[i]);
+      previous_image = std::move(images[i]);
+    }
+    if (progress) progress(std::min(1.0, double(first + chunk) / frames.size()));
+  }
+  if (steps > 0) {
+    q.mean_dissimilarity = sum / steps;
+    q.layout_mean /= steps;
+  }
+  return q;
+}
+
+void write_gif(const std::vector<Image>& frames, const std::filesystem::path& path, int fps) {
+  if (frames.empty()) throw Error("no frames to write to '" + path.string() + "'");
+  const int w = frames.front().width, h = frames.front().height;
+  const auto tmp = path.string() + ".tmp.gif";
+  auto out = OIIO::ImageOutput::create(path.string());
+  if (!out) throw Error("cannot write GIF '" + path.string() + "': " + OIIO::geterror(), "check the extension (.gif)");
+  if (!out->supports("multiimage") || !out->supports("appendsubimage"))
+    throw Error("this OpenImageIO cannot write animated GIFs", "use the PNG frames with another tool");
+  std::vector<OIIO::ImageSpec> specs;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    OIIO::ImageSpec s(w, h, 3, OIIO::TypeDesc::UINT8);
+    s.attribute("FramesPerSecond", OIIO::TypeRational, std::vector<int>{fps, 1}.data());
+    s.attribute("gif:LoopCount", 0);  // loop forever
+    specs.push_back(s);
+  }
+  if (!out->open(tmp, static_cast<int>(specs.size()), specs.data()))
+    throw Error("cannot write GIF '" + path.string() + "': " + out->geterror(), "check that the folder is writable");
+  std::vector<unsigned char> bytes(size_t(w) * h * 3);
+  for (size_t f = 0; f < frames.size(); ++f) {
+    if (f > 0 && !out->open(tmp, specs[f], OIIO::ImageOutput::AppendSubimage))
+      throw Error("cannot append GIF frame: " + out->geterror());
+    const Image img = frames[f].width == w && frames[f].height == h ? frames[f] : resize(frames[f], w, h);
+    for (size_t i = 0; i < bytes.size(); ++i)
+      bytes[i] = static_cast<unsigned char>(std::lround(255 * linear_to_srgb(std::clamp(img.pixels[i], 0.0f, 1.0f))));
+    if (!out->write_image(OIIO::TypeDesc::UINT8, bytes.data())) throw Error("cannot write GIF frame: " + out->geterror());
+  }
+  if (!out->close()) throw Error("cannot write GIF '" + path.string() + "': " + out->geterror());
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error("cannot write GIF '" + path.string() + "': " + ec.message());
+}
+
+}  // namespace proctex::transform
