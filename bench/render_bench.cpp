@@ -1,10 +1,20 @@
 // Render throughput per shader at 256x256 on the OpenCL device: one image per launch (what a
 // single render costs) and 16 per launch (what the catalogue and the search use).
 //   build/bench/bench_render [--markdown FILE] [google-benchmark flags]
+// A/B mode for optimising shaders on a shared, noisy machine: renders the shaders found in two
+// folders (same file names, e.g. before/ and after/ copies) in alternation, many short rounds, and
+// reports median and minimum per image for each side. Without DIR_B it times the built-in library
+// the same way (interleaved rounds over all shaders; robust to load drifting during the run).
+//   build/bench/bench_render --ab DIR_A [DIR_B] [--rounds N] [--reps K] [--only a,b,c]
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <sstream>
+#include <set>
 #include <fstream>
 #include <map>
 
@@ -47,6 +57,78 @@ class TableReporter : public benchmark::ConsoleReporter {
   }
 };
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+}
+
+// Milliseconds per image of `reps` single-image renders.
+double time_renders(Renderer& renderer, const ShaderDecl& decl, int reps) {
+  RenderSettings s;
+  s.width = s.height = 256;
+  const std::vector<std::vector<float>> params(1, decl.default_packed());
+  const std::vector<uint32_t> seeds(1, 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < reps; ++i) benchmark::DoNotOptimize(renderer.render_batch(decl, params, seeds, s));
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / reps;
+}
+
+int run_ab(const std::string& dir_a, const std::string& dir_b, int rounds, int reps, const std::string& only) {
+  const ShaderLibrary lib_a = dir_a == "builtin" ? ShaderLibrary::builtin() : ShaderLibrary::from_directory(dir_a);
+  const ShaderLibrary lib_b = dir_b.empty() ? ShaderLibrary() : ShaderLibrary::from_directory(dir_b);
+  std::set<std::string> wanted;
+  std::stringstream names(only);
+  for (std::string n; std::getline(names, n, ',');)
+    if (!n.empty()) wanted.insert(n);
+  struct Entry {
+    std::string name;
+    const ShaderDecl* a;
+    const ShaderDecl* b;
+    std::vector<double> ta, tb;
+  };
+  std::vector<Entry> entries;
+  for (const auto& d : lib_a.shaders()) {
+    if (!wanted.empty() && !wanted.count(d.name)) continue;
+    const ShaderDecl* b = dir_b.empty() ? nullptr : lib_b.find(d.name);
+    if (!dir_b.empty() && !b) continue;
+    entries.push_back({d.name, &d, b, {}, {}});
+  }
+  Renderer ra(lib_a), rb(lib_b);
+  for (auto& e : entries) {  // build + PoCL's first-launch compile, outside the timing
+    time_renders(ra, *e.a, 1);
+    if (e.b) time_renders(rb, *e.b, 1);
+  }
+  for (int r = 0; r < rounds; ++r)
+    for (auto& e : entries) {
+      if (!e.b) { e.ta.push_back(time_renders(ra, *e.a, reps)); continue; }
+      if (r % 2 == 0) {  // alternate which side goes first
+        e.ta.push_back(time_renders(ra, *e.a, reps));
+        e.tb.push_back(time_renders(rb, *e.b, reps));
+      } else {
+        e.tb.push_back(time_renders(rb, *e.b, reps));
+        e.ta.push_back(time_renders(ra, *e.a, reps));
+      }
+    }
+  std::printf("%d rounds x %d renders, ms per 256x256 image (1 per launch)\n", rounds, reps);
+  if (dir_b.empty()) {
+    std::printf("%-16s %8s %8s\n", "shader", "median", "min");
+    std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) { return median(x.ta) > median(y.ta); });
+    for (const auto& e : entries)
+      std::printf("%-16s %8.2f %8.2f\n", e.name.c_str(), median(e.ta), *std::min_element(e.ta.begin(), e.ta.end()));
+    return 0;
+  }
+  std::printf("%-16s %8s %8s %8s %8s %7s %6s\n", "shader", "A med", "B med", "A min", "B min", "B/A", "B wins");
+  for (const auto& e : entries) {
+    int wins = 0;
+    for (size_t i = 0; i < e.ta.size(); ++i) wins += e.tb[i] < e.ta[i];
+    std::printf("%-16s %8.2f %8.2f %8.2f %8.2f %7.3f %3d/%d\n", e.name.c_str(), median(e.ta), median(e.tb),
+                *std::min_element(e.ta.begin(), e.ta.end()), *std::min_element(e.tb.begin(), e.tb.end()),
+                median(e.tb) / median(e.ta), wins, static_cast<int>(e.ta.size()));
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,6 +137,17 @@ int main(int argc, char** argv) {
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--markdown") == 0 && i + 1 < argc) markdown = argv[++i];
     else args.push_back(argv[i]);
+  }
+  if (argc > 2 && std::strcmp(argv[1], "--ab") == 0) {
+    std::string dir_a = argv[2], dir_b, only;
+    int rounds = 15, reps = 5;
+    for (int i = 3; i < argc; ++i) {
+      if (std::strcmp(argv[i], "--rounds") == 0 && i + 1 < argc) rounds = std::atoi(argv[++i]);
+      else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = std::atoi(argv[++i]);
+      else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
+      else if (argv[i][0] != '-' && dir_b.empty()) dir_b = argv[i];
+    }
+    return run_ab(dir_a, dir_b, std::max(rounds, 1), std::max(reps, 1), only);
   }
   int n = static_cast<int>(args.size());
   for (const auto& d : ShaderLibrary::builtin().shaders())

@@ -1,9 +1,8 @@
 // Cell addressing for tilings and scattered features: which tile a point is in, where inside it,
 // and the distance to the tile's border (for grout, mortar, gaps antialiased with pt_coverage).
 
-// Voronoi cells with the exact distance to the nearest cell border (two passes, after Inigo
-// Quilez), for stones, cobbles, cells and cracks. One feature point per unit cell, displaced by
-// jitter in [0, 1].
+// Voronoi cells with the distance to the nearest cell border, for stones, cobbles, cells and
+// cracks. One feature point per unit cell, displaced by jitter in [0, 1].
 typedef struct {
   float edge;    // distance to the nearest border between cells (>= 0)
   float f1;      // distance to the cell's feature point
@@ -13,41 +12,62 @@ typedef struct {
 } PtVoronoi;
 
 // Feature point of lattice cell (cx, cy). `mixed` is pt_hash(seed), hashed once per lookup: one
-// hash per point (two 16-bit coordinates) keeps the 34 points of pt_voronoi cheap.
+// hash per point (two 16-bit coordinates) keeps the points of pt_voronoi cheap.
 float2 pt_voronoi_point(int cx, int cy, float jitter, uint mixed) {
   const uint h = pt_hash(((uint)cx * 0x8da6b343U) ^ ((uint)cy * 0xd8163841U) ^ mixed);
   const float2 u = (float2)((float)(h & 0xffffU), (float)(h >> 16)) * (1.0f / 65536.0f);
   return (float2)((float)cx, (float)cy) + 0.5f + jitter * (u - 0.5f);
 }
 
+// One pass over the 3x3 cells around p keeps the three nearest points; the border distance is the
+// distance to the nearer of the bisectors between the nearest point and the second and third.
+// Near a border (where the value matters: gaps, cracks, rims) the cell across it is practically
+// always one of those two, so the result there equals the exact two-pass search (5x5 second pass,
+// after Inigo Quilez); further inside a cell it can come out slightly larger. Measured 19-25% faster for cells, stones
+// and cracked_mud (A/B, bench_render --ab), with 1-2% of pixels changing, by at most 0.09 (0-1).
 PtVoronoi pt_voronoi(float2 p, float jitter, uint seed) {
   const float2 base = floor(p);
   const int bx = (int)base.x, by = (int)base.y;
   const uint mixed = pt_hash(seed);
-  PtVoronoi r;
-  float best = 1e9f;
-  float2 mr = (float2)(0.0f);
-  r.cell = (int2)(bx, by);
+  float d1 = 1e9f, d2 = 1e9f, d3 = 1e9f;  // squared distances, nearest first
+  float2 v1 = (float2)(0.0f), v2 = (float2)(0.0f), v3 = (float2)(0.0f);
+  int2 c1 = (int2)(bx, by);
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
       const float2 d = pt_voronoi_point(bx + dx, by + dy, jitter, mixed) - p;
       const float dd = dot(d, d);
-      if (dd < best) { best = dd; mr = d; r.cell = (int2)(bx + dx, by + dy); }
+      // Branches, not selects: measured faster (most points are rejected by the first test).
+      if (dd < d3) {
+        if (dd < d2) {
+          d3 = d2;
+          v3 = v2;
+          if (dd < d1) {
+            d2 = d1;
+            v2 = v1;
+            d1 = dd;
+            v1 = d;
+            c1 = (int2)(bx + dx, by + dy);
+          } else {
+            d2 = dd;
+            v2 = d;
+          }
+        } else {
+          d3 = dd;
+          v3 = d;
+        }
+      }
     }
+  const float2 e2 = v2 - v1, e3 = v3 - v1;
+  const float l2 = dot(e2, e2), l3 = dot(e3, e3);
   float edge = 1e9f;
-  for (int dy = -2; dy <= 2; ++dy)
-    for (int dx = -2; dx <= 2; ++dx) {
-      const int cx = r.cell.x + dx, cy = r.cell.y + dy;
-      if (dx == 0 && dy == 0) continue;
-      const float2 d = pt_voronoi_point(cx, cy, jitter, mixed) - p;
-      const float2 diff = d - mr;
-      const float l2 = dot(diff, diff);
-      if (l2 > 1e-10f) edge = fmin(edge, dot(0.5f * (mr + d), diff) * rsqrt(l2));
-    }
+  if (l2 > 1e-10f) edge = dot(0.5f * (v1 + v2), e2) * rsqrt(l2);
+  if (l3 > 1e-10f) edge = fmin(edge, dot(0.5f * (v1 + v3), e3) * rsqrt(l3));
+  PtVoronoi r;
   r.edge = fmax(edge, 0.0f);
-  r.f1 = sqrt(best);
-  r.point = p + mr;
-  r.id = pt_u01(pt_hash2(r.cell.x, r.cell.y, seed ^ 0x5bd1e995U));
+  r.f1 = sqrt(d1);
+  r.point = p + v1;
+  r.cell = c1;
+  r.id = pt_u01(pt_hash2(c1.x, c1.y, seed ^ 0x5bd1e995U));
   return r;
 }
 
