@@ -31,7 +31,7 @@ struct MatchCliOptions {
   std::string render;
   std::string compare;
   int size = 1024;
-  int candidates = 6;
+  int candidates = 0;
   double threshold = 0.0;
   int starts = 3;
   long max_evaluations = 300;

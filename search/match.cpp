@@ -8,7 +8,9 @@
 
 #include "catalog/store.h"
 #include "core/error.h"
+#include "kernels/runtime.h"
 #include "metrics/composite.h"
+#include "search/colour_fit.h"
 #include "shaders/library.h"
 #include "shaders/parameter_space.h"
 
@@ -17,17 +19,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Resolution of the screening stage (colour fit and whole-metric score of the best catalogue
+// samples of every candidate shader): the smallest the metrics accept, so screening all shaders
+// costs well under a second.
+constexpr int kScreenResolution = 64;
+
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 struct Start {
   std::string shader;
   const catalog::Sample* sample = nullptr;
-  double similarity = 0.0;
+  double similarity = 0.0;            // whole metric at the screening resolution, colours fitted
+  double catalogue_similarity = 0.0;  // structural, from the stored features
+  std::vector<float> packed;          // the sample with fitted colours
 };
 
 struct ShaderScan {
   catalog::ShaderCatalogue catalogue;
-  std::vector<double> similarity;  // per sample, against the target at full resolution
+  std::vector<double> similarity;  // per sample: structural similarity to the target (see below)
   double best_pruned = 0.0;
   double best_full = 0.0;
 };
@@ -47,6 +56,24 @@ std::vector<int> parse_crop(const std::string& text) {
   }
   if (v.size() != 4) throw UsageError("--crop '" + text + "' is not x,y,w,h", "write e.g. --crop 100,50,512,512");
   return v;
+}
+
+// Similarity with the colour component left out: a catalogue sample's colours were drawn at
+// random and are fitted afterwards (colour_fit.h), so starts are chosen by structure alone. The
+// remaining components keep their relative weights. Falls back to the whole metric when it is
+// not a composite (or has nothing but colour).
+double structural_similarity(const metrics::Metric& metric, const metrics::Features& a, std::span<const float> b) {
+  const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric);
+  if (!composite) return metric.similarity(a.values, b);
+  const auto& components = composite->components();
+  double log_s = 0.0, weight = 0.0;
+  for (size_t k = 0; k < components.size(); ++k) {
+    const auto& c = components[k];
+    if (c.metric->id() == "colour" || c.weight <= 0) continue;
+    log_s += c.weight * std::log(std::max(c.metric->similarity(composite->slice(a.values, k), composite->slice(b, k)), 1e-300));
+    weight += c.weight;
+  }
+  return weight > 0 ? std::exp(log_s / weight) : metric.similarity(a.values, b);
 }
 
 // Checks that the catalogue's features were made by the metric this proctex computes.
@@ -86,13 +113,7 @@ std::vector<catalog::ShaderSummary> usable_shaders(catalog::Store& store, const 
 // At most `per_shader` starts from one shader, so one shader's many near-duplicate samples do not
 // crowd out a second plausible shader; among near-equal similarities smoother samples go first
 // (thesis 4.4: faster and better refinement).
-std::vector<Start> choose_starts(const std::vector<ShaderScan>& scans, const std::vector<int>& chosen, int k) {
-  std::vector<Start> all;
-  for (int c : chosen) {
-    const auto& scan = scans[c];
-    for (size_t i = 0; i < scan.catalogue.samples.size(); ++i)
-      all.push_back({scan.catalogue.shader, &scan.catalogue.samples[i], scan.similarity[i]});
-  }
+std::vector<Start> choose_starts(std::vector<Start> all, int k) {
   std::sort(all.begin(), all.end(), [](const Start& a, const Start& b) {
     if (std::fabs(a.similarity - b.similarity) > 0.01) return a.similarity > b.similarity;
     return a.sample->smoothness < b.sample->smoothness;
@@ -100,11 +121,11 @@ std::vector<Start> choose_starts(const std::vector<ShaderScan>& scans, const std
   const int per_shader = k >= 3 ? (k + 1) / 2 : k;
   std::map<std::string, int> used;
   std::vector<Start> out;
-  for (const auto& s : all) {
+  for (auto& s : all) {
     if (static_cast<int>(out.size()) >= k) break;
     if (used[s.shader] >= per_shader) continue;
     ++used[s.shader];
-    out.push_back(s);
+    out.push_back(std::move(s));
   }
   return out;
 }
@@ -147,7 +168,7 @@ nlohmann::json MatchResult::to_json() const {
   for (const auto& [k, v] : per_metric) metrics_json[k] = v;
   nlohmann::json cands = nlohmann::json::array();
   for (const auto& c : candidates)
-    cands.push_back({{"shader", c.shader}, {"best_pruned", c.best_pruned}, {"best_full", c.best_full}});
+    cands.push_back({{"shader", c.shader}, {"best_pruned", c.best_pruned}, {"best_full", c.best_full}, {"screened", c.screened}});
   return {{"spec", spec.to_json()}, {"similarity", similarity},     {"metrics", metrics_json},
           {"verdict", verdict},      {"evaluations", evaluations}, {"stopped_early", stopped_early},
           {"candidates", cands},     {"starts", starts},           {"timings", timings},
@@ -175,14 +196,20 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const metrics::Features target_coarse = metric.features(target, o.coarse_resolution);
   result.timings["target"] = seconds_since(t_start);
 
-  // 2. Global search: pruned graphs rank shaders, full catalogues of the candidates give starts.
+  // 2. Global search. Every sample of every shader is scored by structure (colour left out:
+  // the samples' colours are random); shaders are ranked by their pruned graph's best, the top-M
+  // (all by default: the scan costs milliseconds) and those above the threshold stay; the best
+  // `screen` samples of each candidate get their colours fitted and are scored with the whole
+  // metric at the screening resolution; the best of those become the starting points.
   report("global");
   const auto t_global = Clock::now();
+  Renderer renderer(library);
   std::vector<ShaderScan> scans;
   for (const auto& s : shaders) {
     ShaderScan scan;
     scan.catalogue = store.load(s.name, false);
-    for (const auto& sample : scan.catalogue.samples) scan.similarity.push_back(metric.similarity(target_full, sample.features));
+    for (const auto& sample : scan.catalogue.samples)
+      scan.similarity.push_back(structural_similarity(metric, target_full, sample.features.values));
     for (int i : scan.catalogue.pruned) scan.best_pruned = std::max(scan.best_pruned, scan.similarity[i]);
     scan.best_full = *std::max_element(scan.similarity.begin(), scan.similarity.end());
     scans.push_back(std::move(scan));
@@ -192,18 +219,50 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_pruned > scans[b].best_pruned; });
   std::vector<int> chosen;
   for (size_t r = 0; r < order.size(); ++r) {
-    const bool by_rank = static_cast<int>(r) < o.candidate_shaders || !o.shaders.empty();
+    const bool by_rank = o.candidate_shaders <= 0 || static_cast<int>(r) < o.candidate_shaders || !o.shaders.empty();
     const bool by_threshold = o.shader_threshold > 0 && scans[order[r]].best_pruned >= o.shader_threshold;
     if (by_rank || by_threshold) chosen.push_back(order[r]);
   }
-  for (int c : chosen)
-    result.candidates.push_back({scans[c].catalogue.shader, scans[c].best_pruned, scans[c].best_full});
-  const auto starts = choose_starts(scans, chosen, std::max(1, o.starts));
+  const ColourTarget colour_target = make_colour_target(target, kScreenResolution);
+  const metrics::Features target_screen = metric.features(colour_target.rgb, kScreenResolution);
+  std::vector<Start> screened;
+  long evaluations = 0;
+  for (int c : chosen) {
+    const auto& scan = scans[c];
+    const ShaderDecl& decl = library.get(scan.catalogue.shader);
+    std::vector<int> best(scan.similarity.size());
+    for (size_t i = 0; i < best.size(); ++i) best[i] = static_cast<int>(i);
+    const size_t keep = std::min<size_t>(best.size(), std::max(1, o.screen));
+    std::partial_sort(best.begin(), best.begin() + keep, best.end(),
+                      [&](int a, int b) { return scan.similarity[a] > scan.similarity[b]; });
+    std::vector<std::vector<float>> packs;
+    std::vector<uint32_t> seeds;
+    std::vector<std::string> pinned;
+    for (size_t i = 0; i < keep; ++i) {
+      const auto& sample = scan.catalogue.samples[best[i]];
+      packs.push_back(apply_fixed(decl, sample.packed, o.fixed, pinned));
+      seeds.push_back(sample.seed);
+    }
+    const auto fits = fit_colours(decl, packs, seeds, pinned, colour_target, renderer, false);
+    evaluations += colour_fit_renders(decl, pinned, keep);
+    for (size_t i = 0; i < keep; ++i) {
+      const double s = metric.similarity(target_screen, metric.features(fits[i].preview, kScreenResolution));
+      screened.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]], fits[i].packed});
+    }
+  }
+  for (int c : chosen) {
+    double screen_best = 0.0;
+    for (const auto& st : screened)
+      if (st.shader == scans[c].catalogue.shader) screen_best = std::max(screen_best, st.similarity);
+    result.candidates.push_back({scans[c].catalogue.shader, scans[c].best_pruned, scans[c].best_full, screen_best});
+  }
+  std::sort(result.candidates.begin(), result.candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.screened > b.screened; });
+  const auto starts = choose_starts(screened, std::max(1, o.starts));
   result.timings["global"] = seconds_since(t_global);
 
-  // 3. Local refinement from each start, at the coarse resolution.
+  // 3. Local refinement from each start, at the coarse resolution, after polishing its colours.
   const auto t_local = Clock::now();
-  Renderer renderer(library);
   struct Refined {
     const ShaderDecl* decl;
     std::vector<float> packed;
@@ -211,12 +270,14 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     double coarse;
   };
   std::vector<Refined> refined;
-  long evaluations = 0;
   for (size_t i = 0; i < starts.size(); ++i) {
     const auto& st = starts[i];
     const ShaderDecl& decl = library.get(st.shader);
     std::vector<std::string> pinned;
-    const auto base = apply_fixed(decl, st.sample->packed, o.fixed, pinned);
+    auto base = apply_fixed(decl, st.sample->packed, o.fixed, pinned);
+    const auto colours = fit_colours(decl, {st.packed}, {st.sample->seed}, pinned, colour_target, renderer, true).front();
+    evaluations += colour_fit_renders(decl, pinned, 1);
+    base = colours.packed;
     const ParameterSpace space(decl, base, pinned);
     Objective objective(space, target_coarse, metric, renderer, st.sample->seed, o.coarse_resolution);
     Budget budget = o.budget;
@@ -243,8 +304,13 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     evaluations += objective.evaluations();
     result.stopped_early |= objective.exhausted() || (stop && *stop);
     refined.push_back({&decl, space.to_packed(r.unit), st.sample->seed, r.similarity});
-    result.starts.push_back({{"shader", st.shader}, {"catalogue_similarity", st.similarity},
-                             {"refined_similarity_coarse", r.similarity}, {"evaluations", objective.evaluations()}});
+    result.starts.push_back({{"shader", st.shader},
+                             {"catalogue_similarity", st.catalogue_similarity},
+                             {"screened_similarity", st.similarity},
+                             {"colours_fitted", colours.fitted},
+                             {"colour_similarity", {{"catalogue", colours.before}, {"fitted", colours.after}}},
+                             {"refined_similarity_coarse", r.similarity},
+                             {"evaluations", objective.evaluations()}});
   }
   result.timings["local"] = seconds_since(t_local);
 
@@ -274,6 +340,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   result.verdict = verdict_for(result.similarity);
   result.timings["final"] = seconds_since(t_final);
   result.timings["total"] = seconds_since(t_start);
+  result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above
   nlohmann::json names = nlohmann::json::array();
   for (const auto& s : shaders) names.push_back(s.name);
   result.catalogue = {{"path", store.path().string()}, {"shaders", names}, {"metric", metric.id()},

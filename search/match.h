@@ -35,8 +35,9 @@ std::string verdict_for(double similarity);
 
 struct MatchOptions {
   std::vector<std::string> shaders;   // restrict the search to these (empty: whole catalogue)
-  int candidate_shaders = 6;          // top-M shaders by their pruned graph
+  int candidate_shaders = 0;          // top-M shaders by their pruned graph (0: all)
   double shader_threshold = 0.0;      // also every shader whose pruned best reaches this
+  int screen = 4;                     // best catalogue samples per candidate shader screened
   int starts = 3;                     // top-k starting points refined
   int resolution = 256;               // analysis resolution of the result (catalogue features)
   int coarse_resolution = 128;        // analysis resolution during refinement
@@ -49,6 +50,7 @@ struct Candidate {
   std::string shader;
   double best_pruned = 0.0;   // best similarity over the pruned graph
   double best_full = 0.0;     // best over the full catalogue (candidates only)
+  double screened = 0.0;      // best whole-metric similarity after the colour fit (screening)
 };
 
 struct MatchResult {

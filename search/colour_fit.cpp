@@ -1,0 +1,257 @@
+#include "search/colour_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <Eigen/Dense>
+#include <nlopt.hpp>
+
+#include "image/image.h"
+
+namespace proctex::search {
+namespace {
+
+float luminance(const float* rgb) { return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2]; }
+
+// Free colour parameters: searchable and not pinned by --fix.
+std::vector<const ParamDecl*> free_colours(const ShaderDecl& decl, const std::vector<std::string>& pinned) {
+  std::vector<const ParamDecl*> out;
+  for (const auto& p : decl.params)
+    if (p.type == ParamType::Color && p.searchable && std::find(pinned.begin(), pinned.end(), p.name) == pinned.end())
+      out.push_back(&p);
+  return out;
+}
+
+// b + sum_j w_j * colour_j, per channel. Colours are 3K values, colour j's channel c at 3j + c.
+struct LinearModel {
+  Image offset;
+  std::vector<Image> weights;  // one per free colour
+  std::vector<double> lower, upper;
+
+  size_t pixels() const { return offset.pixels.size() / 3; }
+
+  Image combine(const std::vector<double>& colours) const {
+    Image out = offset;
+    for (size_t j = 0; j < weights.size(); ++j) {
+      const float* w = weights[j].pixels.data();
+      for (size_t i = 0; i < out.pixels.size(); ++i) out.pixels[i] += w[i] * float(colours[3 * j + i % 3]);
+    }
+    return out;
+  }
+
+  // Least-squares colours that make the model reproduce `wanted` (3 floats per pixel), per channel.
+  std::vector<double> solve(const std::vector<float>& wanted) const {
+    const size_t k = weights.size();
+    std::vector<double> colours(3 * k, 0.0);
+    for (int ch = 0; ch < 3; ++ch) {
+      Eigen::MatrixXd ata = Eigen::MatrixXd::Zero(k, k);
+      Eigen::VectorXd atb = Eigen::VectorXd::Zero(k);
+      for (size_t i = 0; i < pixels(); ++i) {
+        const size_t at = 3 * i + ch;
+        const double residual = wanted[at] - offset.pixels[at];
+        for (size_t a = 0; a < k; ++a) {
+          const double wa = weights[a].pixels[at];
+          atb[a] += wa * residual;
+          for (size_t b = a; b < k; ++b) ata(a, b) += wa * weights[b].pixels[at];
+        }
+      }
+      ata = ata.selfadjointView<Eigen::Upper>();
+      ata.diagonal().array() += 1e-6 * (1.0 + ata.diagonal().maxCoeff());  // a colour that shows nowhere stays put
+      const Eigen::VectorXd x = ata.ldlt().solve(atb);
+      for (size_t a = 0; a < k; ++a) colours[3 * a + ch] = std::clamp(x[a], lower[3 * a + ch], upper[3 * a + ch]);
+    }
+    return colours;
+  }
+};
+
+// Pixel order of a per-pixel key (ascending).
+std::vector<uint32_t> order_by(const std::vector<float>& key) {
+  std::vector<uint32_t> order(key.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+  return order;
+}
+
+// Each pixel gets the target colour of its rank (the target has as many pixels as the model).
+std::vector<float> assign_by_rank(const std::vector<uint32_t>& order, const std::vector<float>& sorted_target, bool reverse) {
+  std::vector<float> wanted(3 * order.size());
+  const size_t n = order.size();
+  for (size_t r = 0; r < n; ++r) {
+    const size_t t = reverse ? n - 1 - r : r;
+    std::copy_n(&sorted_target[3 * t], 3, &wanted[3 * order[r]]);
+  }
+  return wanted;
+}
+
+double colour_similarity(const ColourTarget& target, const Image& image) {
+  return target.colour_metric->similarity(target.colour, target.colour_metric->features(image, target.resolution));
+}
+
+// Histogram matching projected on the model, from an initial ranking of the pixels.
+std::vector<double> rank_fit(const LinearModel& model, const ColourTarget& target, std::vector<float> key, bool reverse) {
+  std::vector<double> colours;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    colours = model.solve(assign_by_rank(order_by(key), target.sorted, reverse));
+    const Image now = model.combine(colours);
+    for (size_t i = 0; i < key.size(); ++i) key[i] = luminance(now.pixel(0, 0) + 3 * i);
+    reverse = false;  // from now on the model's own lightness orders the pixels
+  }
+  return colours;
+}
+
+struct PolishContext {
+  const LinearModel* model;
+  const ColourTarget* target;
+  double best;
+  std::vector<double> best_x;
+};
+
+double polish_objective(unsigned n, const double* x, double*, void* data) {
+  auto& c = *static_cast<PolishContext*>(data);
+  std::vector<double> colours(x, x + n);
+  const double s = colour_similarity(*c.target, c.model->combine(colours));
+  if (s > c.best) {
+    c.best = s;
+    c.best_x = colours;
+  }
+  return std::log(std::max(s, 1e-300));  // flat far from the target otherwise (see refine.cpp)
+}
+
+void polish(const LinearModel& model, const ColourTarget& target, std::vector<double>& colours, double& similarity) {
+  const unsigned n = static_cast<unsigned>(colours.size());
+  nlopt::opt opt(nlopt::LN_SBPLX, n);
+  opt.set_lower_bounds(model.lower);
+  opt.set_upper_bounds(model.upper);
+  opt.set_initial_step(std::vector<double>(n, 0.05));
+  opt.set_maxeval(40 * static_cast<int>(n));
+  opt.set_xtol_abs(1e-3);
+  PolishContext context{&model, &target, similarity, colours};
+  opt.set_max_objective(polish_objective, &context);
+  std::vector<double> x = colours;
+  double f = 0.0;
+  try {
+    opt.optimize(x, f);
+  } catch (const nlopt::roundoff_limited&) {
+  } catch (const nlopt::forced_stop&) {
+  }
+  colours = context.best_x;
+  similarity = context.best;
+}
+
+}  // namespace
+
+ColourTarget make_colour_target(const Image& image, int resolution) {
+  ColourTarget t;
+  t.resolution = resolution;
+  t.rgb = resize(center_crop_square(image), resolution, resolution);
+  const size_t n = t.rgb.pixels.size() / 3;
+  std::vector<float> key(n);
+  for (size_t i = 0; i < n; ++i) key[i] = luminance(&t.rgb.pixels[3 * i]);
+  const auto order = order_by(key);
+  t.sorted.resize(3 * n);
+  for (size_t r = 0; r < n; ++r) std::copy_n(&t.rgb.pixels[3 * order[r]], 3, &t.sorted[3 * r]);
+  t.colour_metric = &metrics::get_metric("colour");
+  t.colour = t.colour_metric->features(t.rgb, resolution);
+  return t;
+}
+
+long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts) {
+  const auto k = free_colours(decl, pinned).size();
+  return static_cast<long>(starts * (k ? k + 2 : 1));
+}
+
+std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vector<std::vector<float>>& packed,
+                                         const std::vector<uint32_t>& seeds, const std::vector<std::string>& pinned,
+                                         const ColourTarget& target, Renderer& renderer, bool polish_fit) {
+  const auto colours = free_colours(decl, pinned);
+  const size_t k = colours.size();
+  // One launch: per start, all free colours black, each colour white alone, and the start itself.
+  std::vector<std::vector<float>> batch;
+  std::vector<uint32_t> batch_seeds;
+  for (size_t s = 0; s < packed.size(); ++s) {
+    if (k) {
+      for (size_t white = 0; white <= k; ++white) {  // white == k: all black
+        auto p = packed[s];
+        for (size_t j = 0; j < k; ++j)
+          for (int ch = 0; ch < 3; ++ch) p[colours[j]->offset + ch] = j == white ? 1.0f : 0.0f;
+        batch.push_back(std::move(p));
+      }
+    }
+    batch.push_back(packed[s]);
+    batch_seeds.insert(batch_seeds.end(), k ? k + 2 : 1, seeds[s]);
+  }
+  RenderSettings settings;
+  settings.width = settings.height = target.resolution;
+  const auto images = renderer.render_batch(decl, batch, batch_seeds, settings);
+
+  std::vector<ColourFitResult> results;
+  size_t at = 0;
+  for (size_t s = 0; s < packed.size(); ++s) {
+    ColourFitResult r;
+    r.packed = packed[s];
+    if (!k) {
+      r.preview = images[at++];
+      r.before = r.after = colour_similarity(target, r.preview);
+      results.push_back(std::move(r));
+      continue;
+    }
+    LinearModel model;
+    model.offset = images[at + k];
+    for (size_t j = 0; j < k; ++j) {
+      Image w = images[at + j];
+      for (size_t i = 0; i < w.pixels.size(); ++i) w.pixels[i] -= model.offset.pixels[i];
+      model.weights.push_back(std::move(w));
+    }
+    const Image& actual = images[at + k + 1];
+    at += k + 2;
+    std::vector<double> start;
+    for (const auto* c : colours)
+      for (int ch = 0; ch < 3; ++ch) {
+        start.push_back(packed[s][c->offset + ch]);
+        model.lower.push_back(c->min);
+        model.upper.push_back(c->max);
+      }
+    // Linearity check at the start's own colours: a shader that transforms its colours (contrast,
+    // hue shifts, colour-dependent masks) would make the basis lie.
+    const Image predicted = model.combine(start);
+    float peak = 1.0f;
+    for (size_t i = 0; i < actual.pixels.size(); ++i) {
+      peak = std::max(peak, std::fabs(actual.pixels[i]));
+      r.linearity_error = std::max<double>(r.linearity_error, std::fabs(predicted.pixels[i] - actual.pixels[i]));
+    }
+    r.preview = actual;
+    r.before = r.after = colour_similarity(target, actual);
+    if (r.linearity_error > 2e-3 * peak) {
+      results.push_back(std::move(r));
+      continue;
+    }
+    // Initial rankings: each colour's mask, both ways.
+    std::vector<double> best_colours = start;
+    double best = r.before;
+    for (size_t j = 0; j < k; ++j) {
+      std::vector<float> key(model.pixels());
+      for (size_t i = 0; i < key.size(); ++i) key[i] = luminance(model.weights[j].pixel(0, 0) + 3 * i);
+      for (bool reverse : {false, true}) {
+        const auto fitted = rank_fit(model, target, key, reverse);
+        const double sim = colour_similarity(target, model.combine(fitted));
+        if (sim > best) {
+          best = sim;
+          best_colours = fitted;
+        }
+      }
+    }
+    if (polish_fit) polish(model, target, best_colours, best);
+    if (best > r.before) {
+      r.fitted = true;
+      r.after = best;
+      r.preview = model.combine(best_colours);
+      for (size_t j = 0; j < k; ++j)
+        for (int ch = 0; ch < 3; ++ch) r.packed[colours[j]->offset + ch] = float(best_colours[3 * j + ch]);
+    }
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+}  // namespace proctex::search

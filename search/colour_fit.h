@@ -1,0 +1,55 @@
+#pragma once
+// Colour fitting: a catalogue start usually has the right structure in the wrong colours (its
+// colours were drawn at random), and the default metric punishes colour hard; the structural
+// metrics see lightness, so a wrong colour also changes contrast and polarity. Most shaders mix
+// their colour parameters linearly, per channel, by masks and shading:
+//     image(x) = b(x) + sum_j w_j(x) * colour_j
+// so K + 1 renders (all colours black; then each colour white alone) give the basis b, w_j, and
+// any choice of colours is a weighted sum of images - no further renders. One extra render at
+// the start's own colours checks the linearity; a shader that is not linear in its colours is
+// left alone (the refinement still searches its colours, only more slowly).
+//
+// The fit itself is closed-form histogram matching projected on the linear model: rank the
+// model's pixels by lightness, give each pixel the target colour of the same rank, solve the
+// per-channel least squares for the colours, repeat (ranks move). Each colour mask is tried as
+// the initial ranking in both directions (dark-on-light and light-on-dark), and the result with
+// the best colour similarity is kept. An optional NLopt polish then maximises the colour metric
+// on the same basis.
+#include <string>
+#include <vector>
+
+#include "metrics/metric.h"
+#include "shaders/renderer.h"
+
+namespace proctex::search {
+
+// What the colour fit compares with: the target at the fit's resolution, once.
+struct ColourTarget {
+  int resolution = 64;
+  Image rgb;                          // centre square of the target, resolution^2, linear RGB
+  std::vector<float> sorted;          // its pixels sorted by luminance, RGB triples
+  metrics::Features colour;           // its features under the "colour" metric
+  const metrics::Metric* colour_metric = nullptr;
+};
+ColourTarget make_colour_target(const Image& target, int resolution = 64);
+
+struct ColourFitResult {
+  std::vector<float> packed;     // the start with fitted colours (unchanged when not fitted)
+  bool fitted = false;           // false: no free colour, or the shader is not linear in them
+  double before = 0.0;           // colour similarity at the start's colours
+  double after = 0.0;            // ... at the fitted colours
+  double linearity_error = 0.0;  // max |prediction - render| at the start's colours
+  Image preview;                 // the image at the fitted colours (the render when not fitted)
+};
+
+// Fits the free colours (searchable, not in `pinned`) of each start; all bases are rendered in
+// one launch at the target's resolution (so `packed.size() * (K + 2)` renders). `polish` adds an
+// NLopt pass on the colour metric (about a thousand cheap evaluations, no renders).
+std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vector<std::vector<float>>& packed,
+                                         const std::vector<uint32_t>& seeds, const std::vector<std::string>& pinned,
+                                         const ColourTarget& target, Renderer& renderer, bool polish);
+
+// Renders fit_colours spends for `starts` starting points of `decl`.
+long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts);
+
+}  // namespace proctex::search
