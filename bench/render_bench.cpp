@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <sstream>
 #include <set>
 #include <fstream>
@@ -63,15 +64,27 @@ double median(std::vector<double> v) {
   return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
 }
 
-// Milliseconds per image of `reps` single-image renders.
-double time_renders(Renderer& renderer, const ShaderDecl& decl, int reps) {
+double process_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+// Milliseconds per image of `reps` single-image renders: wall-clock time, and the CPU time of all
+// the process's threads (PoCL's workers included), which other processes' load disturbs much less.
+struct Timing {
+  double wall, cpu;
+};
+Timing time_renders(Renderer& renderer, const ShaderDecl& decl, int reps) {
   RenderSettings s;
   s.width = s.height = 256;
   const std::vector<std::vector<float>> params(1, decl.default_packed());
   const std::vector<uint32_t> seeds(1, 0);
+  const double c0 = process_cpu_ms();
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < reps; ++i) benchmark::DoNotOptimize(renderer.render_batch(decl, params, seeds, s));
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / reps;
+  const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return {wall / reps, (process_cpu_ms() - c0) / reps};
 }
 
 int run_ab(const std::string& dir_a, const std::string& dir_b, int rounds, int reps, const std::string& only) {
@@ -85,46 +98,59 @@ int run_ab(const std::string& dir_a, const std::string& dir_b, int rounds, int r
     std::string name;
     const ShaderDecl* a;
     const ShaderDecl* b;
-    std::vector<double> ta, tb;
+    std::vector<double> ta, tb, ca, cb;  // wall and CPU ms per image, one entry per round
   };
   std::vector<Entry> entries;
   for (const auto& d : lib_a.shaders()) {
     if (!wanted.empty() && !wanted.count(d.name)) continue;
     const ShaderDecl* b = dir_b.empty() ? nullptr : lib_b.find(d.name);
     if (!dir_b.empty() && !b) continue;
-    entries.push_back({d.name, &d, b, {}, {}});
+    entries.push_back({d.name, &d, b, {}, {}, {}, {}});
   }
   Renderer ra(lib_a), rb(lib_b);
   for (auto& e : entries) {  // build + PoCL's first-launch compile, outside the timing
     time_renders(ra, *e.a, 1);
     if (e.b) time_renders(rb, *e.b, 1);
   }
+  auto run = [&](Renderer& r, const ShaderDecl& d, std::vector<double>& wall, std::vector<double>& cpu) {
+    const Timing t = time_renders(r, d, reps);
+    wall.push_back(t.wall);
+    cpu.push_back(t.cpu);
+  };
   for (int r = 0; r < rounds; ++r)
     for (auto& e : entries) {
-      if (!e.b) { e.ta.push_back(time_renders(ra, *e.a, reps)); continue; }
-      if (r % 2 == 0) {  // alternate which side goes first
-        e.ta.push_back(time_renders(ra, *e.a, reps));
-        e.tb.push_back(time_renders(rb, *e.b, reps));
+      if (!e.b) {
+        run(ra, *e.a, e.ta, e.ca);
+      } else if (r % 2 == 0) {  // alternate which side goes first
+        run(ra, *e.a, e.ta, e.ca);
+        run(rb, *e.b, e.tb, e.cb);
       } else {
-        e.tb.push_back(time_renders(rb, *e.b, reps));
-        e.ta.push_back(time_renders(ra, *e.a, reps));
+        run(rb, *e.b, e.tb, e.cb);
+        run(ra, *e.a, e.ta, e.ca);
       }
     }
-  std::printf("%d rounds x %d renders, ms per 256x256 image (1 per launch)\n", rounds, reps);
+  auto lo = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  std::printf("%d rounds x %d renders, ms per 256x256 image (1 per launch); wall clock and process CPU time\n",
+              rounds, reps);
   if (dir_b.empty()) {
-    std::printf("%-16s %8s %8s\n", "shader", "median", "min");
+    std::printf("%-16s %9s %9s %9s %9s\n", "shader", "wall med", "wall min", "cpu med", "cpu min");
     std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) { return median(x.ta) > median(y.ta); });
     for (const auto& e : entries)
-      std::printf("%-16s %8.2f %8.2f\n", e.name.c_str(), median(e.ta), *std::min_element(e.ta.begin(), e.ta.end()));
+      std::printf("%-16s %9.2f %9.2f %9.2f %9.2f\n", e.name.c_str(), median(e.ta), lo(e.ta), median(e.ca), lo(e.ca));
     return 0;
   }
-  std::printf("%-16s %8s %8s %8s %8s %7s %6s\n", "shader", "A med", "B med", "A min", "B min", "B/A", "B wins");
+  std::printf("%-16s %8s %8s %8s %8s %6s %6s | %8s %8s %6s %6s\n", "shader", "A med", "B med", "A min", "B min",
+              "B/A", "B wins", "A cpu", "B cpu", "B/A", "B wins");
   for (const auto& e : entries) {
-    int wins = 0;
-    for (size_t i = 0; i < e.ta.size(); ++i) wins += e.tb[i] < e.ta[i];
-    std::printf("%-16s %8.2f %8.2f %8.2f %8.2f %7.3f %3d/%d\n", e.name.c_str(), median(e.ta), median(e.tb),
-                *std::min_element(e.ta.begin(), e.ta.end()), *std::min_element(e.tb.begin(), e.tb.end()),
-                median(e.tb) / median(e.ta), wins, static_cast<int>(e.ta.size()));
+    int wins = 0, cpu_wins = 0;
+    for (size_t i = 0; i < e.ta.size(); ++i) {
+      wins += e.tb[i] < e.ta[i];
+      cpu_wins += e.cb[i] < e.ca[i];
+    }
+    const int n = static_cast<int>(e.ta.size());
+    std::printf("%-16s %8.2f %8.2f %8.2f %8.2f %6.3f %3d/%-2d | %8.2f %8.2f %6.3f %3d/%-2d\n", e.name.c_str(),
+                median(e.ta), median(e.tb), lo(e.ta), lo(e.tb), median(e.tb) / median(e.ta), wins, n, median(e.ca),
+                median(e.cb), median(e.cb) / median(e.ca), cpu_wins, n);
   }
   return 0;
 }

@@ -70,11 +70,28 @@ float pt_ridged(float2 p, float fw, int octaves, float lacunarity, float gain, u
 }
 
 // Domain warping: displaces p by a vector fBm field of the given amplitude (texture units) and
-// feature frequency; returns the warped position.
-float2 pt_warp(float2 p, float fw, float amount, float frequency, int octaves, uint seed) {
-  const float2 q = p * frequency;
+// feature frequency; returns the warped position. Both components come from one pt_gnoise2 per
+// octave (shared lattice hashes), about half the cost of two scalar fBms.
+// noinline: inlined into a shader, it made spots and stones 1.8x slower (PoCL 3.1 / LLVM 15);
+// called, the fused field is 7-15% faster than two pt_fbm (A/B, bench_render --ab).
+__attribute__((noinline)) float2 pt_warp(float2 p, float fw, float amount, float frequency, int octaves,
+                                         uint seed) {
+  float2 q = p * frequency;
   const float wfw = fw * frequency;
-  const float dx = pt_fbm(q, wfw, octaves, 2.0f, 0.5f, pt_subseed(seed, 101u));
-  const float dy = pt_fbm(q + (float2)(5.2f, 1.3f), wfw, octaves, 2.0f, 0.5f, pt_subseed(seed, 202u));
-  return p + amount * (float2)(dx, dy);
+  float2 sum = (float2)(0.0f);
+  float amp = 1.0f, norm = 0.0f, freq = 1.0f;
+  for (int i = 0; i < octaves; ++i) {
+    const float w = pt_octave_weight(freq, wfw);
+    if (w <= 0.0f) {
+      // Filtered octaves average to zero; count their amplitude so the scale stays the same.
+      norm += amp * (1.0f - pt_powr(0.5f, (float)(octaves - i))) / (0.5f + 1e-6f);
+      break;
+    }
+    norm += amp;
+    sum += w * amp * pt_gnoise2(q, pt_subseed(seed, 101u + (uint)i));
+    q = pt_octave_rotate(q) * 2.0f;
+    freq *= 2.0f;
+    amp *= 0.5f;
+  }
+  return p + amount * (norm > 0.0f ? sum / norm : (float2)(0.0f));
 }

@@ -58,6 +58,24 @@ float pt_gnoise(float2 p, uint seed) {
   return 1.41421356f * mix(mix(n00, n10, u.x), mix(n01, n11, u.x), u.y);
 }
 
+// Two independent gradient noises sharing one lattice hash per corner (the gradients come from
+// different bits of it): a 2D vector field for domain warping at about the cost of one noise.
+float2 pt_gnoise2(float2 p, uint seed) {
+  const float2 cell = floor(p);
+  const float2 f = p - cell;
+  const int ix = (int)cell.x;
+  const int iy = (int)cell.y;
+  const float2 u = pt_quintic(f);
+  const uint h00 = pt_hash2(ix, iy, seed), h10 = pt_hash2(ix + 1, iy, seed);
+  const uint h01 = pt_hash2(ix, iy + 1, seed), h11 = pt_hash2(ix + 1, iy + 1, seed);
+  const float2 f10 = f - (float2)(1.0f, 0.0f), f01 = f - (float2)(0.0f, 1.0f), f11 = f - (float2)(1.0f, 1.0f);
+  const float2 n00 = (float2)(dot(PT_GRADIENTS[h00 & 31u], f), dot(PT_GRADIENTS[(h00 >> 8) & 31u], f));
+  const float2 n10 = (float2)(dot(PT_GRADIENTS[h10 & 31u], f10), dot(PT_GRADIENTS[(h10 >> 8) & 31u], f10));
+  const float2 n01 = (float2)(dot(PT_GRADIENTS[h01 & 31u], f01), dot(PT_GRADIENTS[(h01 >> 8) & 31u], f01));
+  const float2 n11 = (float2)(dot(PT_GRADIENTS[h11 & 31u], f11), dot(PT_GRADIENTS[(h11 >> 8) & 31u], f11));
+  return 1.41421356f * mix(mix(n00, n10, u.x), mix(n01, n11, u.x), u.y);
+}
+
 // Value noise: random values at lattice points, smoothly interpolated; range [-1, 1].
 float pt_vnoise(float2 p, uint seed) {
   const float2 cell = floor(p);
@@ -88,8 +106,7 @@ PtCellular pt_cellular(float2 p, float jitter, uint seed) {
   const int bx = (int)base.x;
   const int by = (int)base.y;
   PtCellular r;
-  r.f1 = 1e9f;
-  r.f2 = 1e9f;
+  float d1 = 1e9f, d2 = 1e9f;  // squared distances: one sqrt per result, not per point
   r.cell = (int2)(bx, by);
   r.point = base;
   for (int dy = -1; dy <= 1; ++dy) {
@@ -99,17 +116,52 @@ PtCellular pt_cellular(float2 p, float jitter, uint seed) {
       const float2 pt = (float2)((float)cx, (float)cy) + 0.5f +
                         jitter * (pt_rand2(cx, cy, seed) - 0.5f);
       const float2 d = pt - p;
-      const float dist = sqrt(dot(d, d));
-      if (dist < r.f1) {
-        r.f2 = r.f1;
-        r.f1 = dist;
+      const float dd = dot(d, d);
+      if (dd < d1) {
+        d2 = d1;
+        d1 = dd;
         r.cell = (int2)(cx, cy);
         r.point = pt;
-      } else if (dist < r.f2) {
-        r.f2 = dist;
+      } else if (dd < d2) {
+        d2 = dd;
       }
     }
   }
+  r.f1 = sqrt(d1);
+  r.f2 = sqrt(d2);
+  r.id = pt_u01(pt_hash2(r.cell.x, r.cell.y, seed ^ 0x5bd1e995U));
+  return r;
+}
+
+// The nearest point of pt_cellular (the same points, cell, point and id) for patterns where only
+// points closer than `radius` matter (dots, pits, pores): f1 is exact when below radius, else
+// some value >= radius; f2 is not computed (1e9). Points within radius of p all lie in the 2x2
+// cells nearest p when radius <= 1 - jitter / 2, so that case checks 4 cells instead of 9.
+PtCellular pt_cellular_near(float2 p, float jitter, float radius, uint seed) {
+  const int n = radius <= 1.0f - 0.5f * jitter ? 2 : 3;
+  const int x0 = n == 2 ? (int)floor(p.x - 0.5f) : (int)floor(p.x) - 1;
+  const int y0 = n == 2 ? (int)floor(p.y - 0.5f) : (int)floor(p.y) - 1;
+  PtCellular r;
+  float d1 = 1e9f;
+  r.cell = (int2)(x0, y0);
+  r.point = p;
+  for (int dy = 0; dy < n; ++dy) {
+    for (int dx = 0; dx < n; ++dx) {
+      const int cx = x0 + dx;
+      const int cy = y0 + dy;
+      const float2 pt = (float2)((float)cx, (float)cy) + 0.5f +
+                        jitter * (pt_rand2(cx, cy, seed) - 0.5f);
+      const float2 d = pt - p;
+      const float dd = dot(d, d);
+      if (dd < d1) {
+        d1 = dd;
+        r.cell = (int2)(cx, cy);
+        r.point = pt;
+      }
+    }
+  }
+  r.f1 = sqrt(d1);
+  r.f2 = 1e9f;
   r.id = pt_u01(pt_hash2(r.cell.x, r.cell.y, seed ^ 0x5bd1e995U));
   return r;
 }

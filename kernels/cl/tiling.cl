@@ -74,8 +74,10 @@ PtVoronoi pt_voronoi(float2 p, float jitter, uint seed) {
 // Random feature k of lattice cell (cx, cy) for bombing/scattering: .xy a position inside the
 // cell, .zw two more uniforms (size, brightness, colour, orientation ...).
 float4 pt_cell_feature(int cx, int cy, int k, uint seed) {
-  // Two hashes give four 16-bit uniforms: plenty for positions inside a cell.
-  const uint h = pt_hash3(cx, cy, k, seed);
+  // Two hashes give four 16-bit uniforms: plenty for positions inside a cell. The first mixes the
+  // cell, k and the seed in one hash (as pt_voronoi_point does) instead of pt_hash3's chain of
+  // four: grass, which reads 27 features per pixel, rendered 15% faster (A/B, bench_render --ab).
+  const uint h = pt_hash(((uint)cx * 0x8da6b343U) ^ ((uint)cy * 0xd8163841U) ^ ((uint)k * 0xcb1ab31fU) ^ pt_hash(seed));
   const uint h2 = pt_hash(h ^ 0x9e3779b9U);
   const float s = 1.0f / 65536.0f;
   return (float4)((float)cx + (float)(h & 0xffffU) * s, (float)cy + (float)(h >> 16) * s,

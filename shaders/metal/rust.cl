@@ -23,8 +23,10 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float3 rc = mix(P.rust_color, P.dark_color, depth);
   rc *= 1.0f + 0.5f * P.roughness * f;
   // Pits: small dark cellular dots.
-  const PtCellular c = pt_cellular(q * 8.0f, 1.0f, pt_subseed(seed, 4u));
-  const float pit = P.pitting * (1.0f - smoothstep(0.05f, 0.25f + w * 8.0f, c.f1)) * step(0.6f, c.id);
+  // Only points nearer than the pit radius matter: the 2x2-cell search finds them (exact).
+  const float pit_radius = 0.25f + w * 8.0f;
+  const PtCellular c = pt_cellular_near(q * 8.0f, 1.0f, pit_radius, pt_subseed(seed, 4u));
+  const float pit = P.pitting * (1.0f - smoothstep(0.05f, pit_radius, c.f1)) * step(0.6f, c.id);
   rc = mix(rc, P.dark_color * 0.5f, pit);
   float3 mc = P.metal_color * (1.0f + 0.1f * f);
   return pt_saturate3(mix(mc, rc, rust));

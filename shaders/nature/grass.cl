@@ -24,13 +24,15 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
       for (int dx = -1; dx <= 1; ++dx) {
         const int cx = (int)base.x + dx, cy = (int)base.y + dy;
         const float4 f = pt_cell_feature(cx, cy, layer, ls);
+        const float len = P.length * (0.6f + 0.4f * f.w) * 0.5f;
+        const float2 off = q - f.xy;
+        if (dot(off, off) > (len + P.width + w) * (len + P.width + w)) continue;  // out of reach
         // Direction: the mean direction turned by a random angle (small-angle rotation, no trig).
         const float turn = P.randomness * 3.1f * (f.z - 0.5f);
         float2 dir = mean_dir + turn * (float2)(-mean_dir.y, mean_dir.x);
         dir *= rsqrt(dot(dir, dir));
-        const float len = P.length * (0.6f + 0.4f * f.w) * 0.5f;
-        const float2 off = q - f.xy;
-        if (dot(off, off) > (len + P.width + w) * (len + P.width + w)) continue;  // out of reach
+        // Far from the blade's centre line the blade cannot cover the pixel (exact, cheap test).
+        if (fabs(off.x * dir.y - off.y * dir.x) >= 0.5f * (P.width + w)) continue;
         const float2 a = f.xy - dir * len, b = f.xy + dir * len;
         // Distance along and across the blade; it tapers to a point at b.
         const float2 pa = q - a, ba = b - a;
@@ -38,6 +40,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
         const float dist = length(pa - ba * h);
         const float half_w = 0.5f * P.width * (1.0f - h);
         const float cover = pt_coverage(dist - half_w, w) * step(0.0f, 1.0f - h);
+        if (cover <= 0.0f) continue;  // most blades in reach miss the pixel: skip their colour
         float3 bc = mix(P.color, P.tip_color, h * h);
         bc *= 1.0f + P.variation * (pt_fract(f.z * 11.3f + f.w * 7.1f) - 0.5f);
         // Midrib highlight across the blade.

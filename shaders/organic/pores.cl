@@ -21,7 +21,8 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   // Pores: small soft dark dots on a jittered lattice.
   const float2 q = p * P.scale;
   const float w = fw * P.scale;
-  const PtCellular cc = pt_cellular(q, 0.8f, pt_subseed(seed, 4u));
+  // Only points nearer than the largest pore's reach matter (exact 2x2 search up to scale ~45).
+  const PtCellular cc = pt_cellular_near(q, 0.8f, 1.4f * P.pore_size + 0.6f * w, pt_subseed(seed, 4u));
   const float r = P.pore_size * (0.6f + 0.8f * cc.id);
   // Pores smaller than a pixel fade to their area-weighted average darkness.
   const float s = r + 0.6f * w;
