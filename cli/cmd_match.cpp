@@ -33,6 +33,7 @@ struct MatchCliOptions {
   int size = 1024;
   int candidates = 0;
   double threshold = 0.0;
+  int screen = 4;
   int starts = 3;
   long max_evaluations = 300;
   bool json = false;
@@ -91,6 +92,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   options.shaders = split(o.shaders, ',');
   options.candidate_shaders = o.candidates;
   options.shader_threshold = o.threshold;
+  options.screen = o.screen;
   options.starts = o.starts;
   options.refine.optimizer = search::parse_optimizer(o.optimizer);
   options.refine.max_evaluations = o.max_evaluations;
@@ -142,8 +144,9 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   auto o = std::make_shared<MatchCliOptions>();
   auto* cmd = app.add_subcommand("match", "Find the shader and parameters that reproduce a photo");
   cmd->footer(
-      "Searches the catalogue (proctex catalog build) for the closest samples, then refines their\n"
-      "parameters with NLopt. Verdict: good (similarity >= 0.5), approximate (>= 0.25), no-match.\n"
+      "Scores every catalogue sample (proctex catalog build) by structure, fits the colours of the best\n"
+      "samples of each shader and scores them again, then refines the best starts with NLopt.\n"
+      "Verdict: good (similarity >= 0.5), approximate (>= 0.25), no-match. See docs/search.md.\n"
       "  proctex match brick.png --render match.png --size 4096 --compare cmp.png\n"
       "  proctex match wall.jpg --shaders bricks,tiles --fix rows=8 --budget 20s -o result.json\n"
       "Ctrl-C stops the search and returns the best match so far.");
@@ -151,7 +154,8 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--db", o->db, "Catalogue (default: $PROCTEX_CATALOG or ~/.cache/proctex/catalog.sqlite)");
   cmd->add_option("--crop", o->crop, "Use only this part of the photo: x,y,w,h (default: the whole photo, centre square)");
   cmd->add_option("--shaders", o->shaders, "Only these shaders, comma-separated (your knowledge of the material)");
-  cmd->add_option("--candidates", o->candidates, "Shaders kept after the pruned-graph ranking")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--candidates", o->candidates, "Shaders kept after the pruned-graph ranking (0: all; the scan takes milliseconds)")->capture_default_str()->check(CLI::Range(0, 100000));
+  cmd->add_option("--screen", o->screen, "Best catalogue samples per shader whose colours are fitted and scored")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--threshold", o->threshold, "Also keep every shader whose pruned best similarity reaches this")->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--starts", o->starts, "Starting points refined")->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--optimizer", o->optimizer, "neldermead, subplex, bobyqa, global or gradient")->capture_default_str();

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <fcntl.h>
@@ -122,6 +124,51 @@ class StderrSilencer {
   int saved_ = -1;
 };
 
+// Program binaries cache. PoCL caches compiled kernels too, but finding them costs a full
+// preprocessing of the source (about 65 ms per shader program, measured with perf: most of a
+// match's screening time across 53 shaders). A binary from clGetProgramInfo, rebuilt with
+// clCreateProgramWithBinary, skips it. Keyed by device, driver, options and source; a binary the
+// driver refuses is rebuilt from source. The cache is an optimisation: I/O errors are ignored.
+std::filesystem::path binary_cache_dir() {
+  if (const char* dir = std::getenv("PROCTEX_KERNEL_CACHE"); dir && *dir) return dir;
+  if (const char* pocl = std::getenv("POCL_CACHE_DIR"); pocl && *pocl)
+    return std::filesystem::path(pocl) / "proctex-binaries";
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::filesystem::path(xdg) / "proctex/kernels";
+  if (const char* home = std::getenv("HOME"); home && *home) return std::filesystem::path(home) / ".cache/proctex/kernels";
+  return {};
+}
+
+std::string fnv1a_hex(const std::string& text) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::vector<unsigned char> read_binary(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_binary(const std::filesystem::path& path, const std::vector<unsigned char>& bytes) {
+  std::error_code ec;
+  std::filesystem::create_directories(path.parent_path(), ec);
+  const auto tmp = path.string() + ".tmp" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) return;
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    if (!out) return;
+  }
+  std::filesystem::rename(tmp, path, ec);  // atomic: readers never see half a binary
+  if (ec) std::filesystem::remove(tmp, ec);
+}
+
 std::string g_selector;
 std::mutex g_instance_mutex;
 std::unique_ptr<Runtime> g_instance;
@@ -167,6 +214,25 @@ cl::Program Runtime::program(const std::string& source, const std::string& optio
   if (auto it = programs_.find(key); it != programs_.end()) return it->second;
 
   const auto start = std::chrono::steady_clock::now();
+  const auto cache_dir = binary_cache_dir();
+  const std::filesystem::path cached =
+      cache_dir.empty() ? cache_dir
+                        : cache_dir / (fnv1a_hex(device_.platform + '\0' + device_.name + '\0' + device_.driver + '\0' +
+                                                 device_.version + '\0' + key) + ".bin");
+  if (!cached.empty()) {
+    if (auto bytes = read_binary(cached); !bytes.empty()) {
+      try {
+        StderrSilencer quiet;
+        cl::Program program(context_, {cl_device_}, cl::Program::Binaries{bytes});
+        program.build({cl_device_}, options.c_str());
+        build_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        programs_.emplace(key, program);
+        return program;
+      } catch (const cl::Error&) {
+        // Refused (another driver version, a damaged file): build from source and replace it.
+      }
+    }
+  }
   cl::Program program(context_, source);
   try {
     StderrSilencer quiet;
@@ -182,6 +248,13 @@ cl::Program Runtime::program(const std::string& source, const std::string& optio
     }
     throw Error("OpenCL compile error: " + first_compiler_error(log),
                 "fix the shader source; set PROCTEX_VERBOSE=1 to print the full compiler log");
+  }
+  if (!cached.empty()) {
+    try {
+      const auto binaries = program.getInfo<CL_PROGRAM_BINARIES>();
+      if (!binaries.empty() && !binaries.front().empty()) write_binary(cached, binaries.front());
+    } catch (const cl::Error&) {
+    }
   }
   build_seconds_ +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

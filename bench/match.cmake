@@ -1,0 +1,5 @@
+# Match evaluation (issue 6): synthetic recovery and photos; see bench/match_eval.cpp.
+if(TARGET proctex_catalog)
+  add_executable(bench_match_eval ${CMAKE_CURRENT_LIST_DIR}/match_eval.cpp)
+  target_link_libraries(bench_match_eval PRIVATE proctex_search)
+endif()
