@@ -29,7 +29,7 @@ struct MorphCli {
   std::string db, output, gif, sheet;
   int frames = 120, size = 512, dissolve = 0, depth = 6, max_renders = 800, fps = 24, gif_size = 256, jobs = 0;
   double power = 3.0, threshold = 0.9;
-  bool json = false, no_compare = false, no_connective = false;
+  bool json = false, no_compare = false, no_connective = false, blend_steps = false;
 };
 
 bool is_photo(const std::string& arg) {
@@ -136,6 +136,7 @@ void run(const MorphCli& c, const GlobalOptions& global) {
   o.max_renders = c.max_renders;
   o.dissolve = c.dissolve;
   o.connective = !c.no_connective;
+  o.blend_steps = c.blend_steps;
   o.jobs = c.jobs;
   if (!c.output.empty()) check_dimensions(c.size, c.size);
 
@@ -176,18 +177,27 @@ void run(const MorphCli& c, const GlobalOptions& global) {
     const int digits = std::max<int>(4, static_cast<int>(std::to_string(m.frames.size()).size()));
     progress = std::make_unique<Progress>("frames", static_cast<long>(m.frames.size()), global.quiet);
     nlohmann::json manifest = m.manifest();
+    double render_seconds = 0;
     const size_t chunk = std::max<size_t>(1, (64u << 20) / (size_t(c.size) * c.size * 12));  // ~64 MB of renders
     for (size_t first = 0; first < m.frames.size(); first += chunk) {
+      const auto t_render = std::chrono::steady_clock::now();
       const auto images = transform::render_frames(m.frames, first, chunk, renderer, rs);
+      render_seconds += since(t_render);
+      // PNG encoding costs as much as rendering: one file per thread.
+      std::vector<Image> small(images.size());
+      const int gif_side = std::min(c.gif_size, c.size);
+      transform::parallel_for(images.size(), c.jobs, [&](size_t k) {
+        save_image(images[k], dir / fmt::format("frame_{:0{}d}.png", first + k + 1, digits));
+        if (!c.gif.empty()) small[k] = resize(images[k], gif_side, gif_side);
+      });
       for (size_t k = 0; k < images.size(); ++k) {
-        const std::string name = fmt::format("frame_{:0{}d}.png", first + k + 1, digits);
-        save_image(images[k], dir / name);
-        manifest["frames"][first + k]["file"] = name;
-        if (!c.gif.empty()) gif_frames.push_back(resize(images[k], std::min(c.gif_size, c.size), std::min(c.gif_size, c.size)));
+        manifest["frames"][first + k]["file"] = fmt::format("frame_{:0{}d}.png", first + k + 1, digits);
+        if (!c.gif.empty()) gif_frames.push_back(std::move(small[k]));
       }
       progress->update(static_cast<long>(std::min(m.frames.size(), first + chunk)));
     }
     progress->finish();
+    timings["frames_render"] = render_seconds;
     written["frames"] = (dir / fmt::format("frame_{:0{}d}.png .. {}", 1, digits, m.frames.size())).string();
     const fs::path sheet = c.sheet.empty() ? dir / "sheet.png" : fs::path(c.sheet);
     save_image(make_sheet(m.frames, morph_tiles, linear, linear_tiles, tile), sheet);
@@ -253,6 +263,9 @@ void add_morph_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--max-renders", c->max_renders, "Render budget of the subdivision")->capture_default_str()->check(CLI::Range(0, 1000000));
   cmd->add_option("--dissolve", c->dissolve, "Cross-faded frames at each jump between shaders")->capture_default_str()->check(CLI::Range(0, 1000));
   cmd->add_flag("--no-connective", c->no_connective, "Between shaders, only direct jump edges (no third shader)");
+  cmd->add_flag("--blend-steps", c->blend_steps,
+                "Frames inside a whole step of a discrete parameter cross-fade its two ends (default: they pop;\n"
+                "cross-fades change the layout less but are less similar to their neighbours)");
   cmd->add_flag("--no-compare", c->no_compare, "Skip the linear-interpolation baseline");
   cmd->add_option("--jobs,-j", c->jobs, "Threads for the texture metric (0 = all cores)")->capture_default_str();
   cmd->add_flag("--json", c->json, "Print the summary and quality report as JSON");

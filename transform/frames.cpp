@@ -89,15 +89,23 @@ std::vector<Image> render_frames(const std::vector<Frame>& frames, size_t first,
   std::vector<Image> a(end - first), b(end - first);
   for (const auto& [shader, list] : jobs) {
     const ShaderDecl& decl = renderer.library().get(shader);
+    // Blended frames share their ends with their neighbours: each distinct vector renders once.
+    std::map<std::pair<std::vector<float>, uint32_t>, size_t> unique;
     std::vector<std::vector<float>> packed;
     std::vector<uint32_t> seeds;
-    for (const auto& j : list) {
-      const TextureSpec& s = j.second ? *frames[j.frame].blend_to : frames[j.frame].spec;
-      packed.push_back(resolve(decl, s));
-      seeds.push_back(s.seed);
+    std::vector<size_t> which(list.size());
+    for (size_t k = 0; k < list.size(); ++k) {
+      const TextureSpec& s = list[k].second ? *frames[list[k].frame].blend_to : frames[list[k].frame].spec;
+      auto key = std::make_pair(resolve(decl, s), s.seed);
+      auto [it, fresh] = unique.emplace(key, packed.size());
+      if (fresh) {
+        packed.push_back(key.first);
+        seeds.push_back(s.seed);
+      }
+      which[k] = it->second;
     }
-    auto images = renderer.render_batch(decl, packed, seeds, settings);
-    for (size_t k = 0; k < list.size(); ++k) (list[k].second ? b : a)[list[k].frame - first] = std::move(images[k]);
+    const auto images = renderer.render_batch(decl, packed, seeds, settings);
+    for (size_t k = 0; k < list.size(); ++k) (list[k].second ? b : a)[list[k].frame - first] = images[which[k]];
   }
   for (size_t f = first; f < end; ++f) {
     const Frame& fr = frames[f];

@@ -25,6 +25,12 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // up along a path where 1 - S saturates. Floored so an unreachable edge still has finite length.
 double step_length(double similarity) { return -std::log(std::clamp(similarity, 1e-4, 1.0)); }
 
+// An edge whose ends differ in a discrete parameter and in continuous coordinates by less than
+// this is a pure whole step: halving cannot make it smaller.
+constexpr double kPureStep = 1e-4;
+// Half width (in t) of the pure whole step cut out around a discrete crossing.
+constexpr double kCrossingHalfWidth = 1e-5;
+
 // Everything plan() needs about the shaders it touches, loaded once.
 class Context {
  public:
@@ -233,7 +239,7 @@ void subdivide(Context& ctx, std::vector<Waypoint>& path, const MorphOptions& o,
         w.note = "depth cap";
         continue;
       }
-      if (step <= 1 && sp.max_continuous_difference(w.packed, path[i + 1].packed) < 1e-4) {
+      if (step <= 1 && sp.max_continuous_difference(w.packed, path[i + 1].packed) < kPureStep) {
         w.note = discrete_note(sp.decl(), w.packed, path[i + 1].packed);
         continue;
       }
@@ -247,41 +253,68 @@ void subdivide(Context& ctx, std::vector<Waypoint>& path, const MorphOptions& o,
     }
     if (split.empty()) break;
     std::sort(split.begin(), split.end());
+    // An edge where a discrete parameter changes is cut just before and just after the change,
+    // so the whole step stands alone (a pure step, kPureStep) and the rest halves as usual;
+    // other edges are halved at their midpoint.
     std::vector<Context::Request> req;
-    std::vector<std::vector<float>> mids;
-    for (size_t i : split) {
+    std::vector<std::vector<std::vector<float>>> inserts(split.size());
+    std::vector<bool> edge_crossed(split.size());
+    for (size_t k = 0; k < split.size(); ++k) {
+      const size_t i = split[k];
       const MorphSpace& sp = ctx.space(path[i].shader);
-      mids.push_back(sp.lerp(path[i].packed, path[i + 1].packed, 0.5));
-      req.push_back({path[i].shader, mids.back(), seed});
+      const auto crossings = sp.discrete_crossings(path[i].packed, path[i + 1].packed);
+      double previous = 0;
+      for (size_t c = 0; c < crossings.size(); ++c) {
+        const double t = crossings[c], next = c + 1 < crossings.size() ? crossings[c + 1] : 1.0;
+        const double before = std::max(t - kCrossingHalfWidth, (previous + t) / 2);
+        const double after = std::min(t + kCrossingHalfWidth, (t + next) / 2);
+        if (before > previous) inserts[k].push_back(sp.lerp(path[i].packed, path[i + 1].packed, before));
+        inserts[k].push_back(sp.lerp(path[i].packed, path[i + 1].packed, after));
+        previous = after;
+      }
+      if (crossings.empty()) inserts[k].push_back(sp.lerp(path[i].packed, path[i + 1].packed, 0.5));
+      edge_crossed[k] = !crossings.empty();
+      for (const auto& p : inserts[k]) req.push_back({path[i].shader, p, seed});
     }
     auto feats = ctx.features(req, resolution);
     budget -= static_cast<long>(req.size());
     std::vector<Waypoint> next;
-    size_t k = 0;
+    size_t k = 0, f = 0;
     for (size_t i = 0; i < path.size(); ++i) {
       next.push_back(path[i]);
       if (k < split.size() && split[k] == i) {
-        Waypoint& left = next.back();
-        Waypoint mid;
-        mid.shader = left.shader;
-        mid.packed = std::move(mids[k]);
-        mid.kind = "subdivision";
-        mid.features = std::move(feats[k]);
-        mid.depth = left.depth + 1;
-        left.depth += 1;
-        left.similarity = metric.similarity(left.features, mid.features);
-        mid.similarity = metric.similarity(mid.features, path[i + 1].features);
-        next.push_back(std::move(mid));
+        // Cutting out whole steps is not a halving: it does not count towards the depth cap.
+        const int depth = path[i].depth + (edge_crossed[k] ? 0 : 1);
+        next.back().depth = depth;
+        for (auto& p : inserts[k]) {
+          Waypoint mid;
+          mid.shader = path[i].shader;
+          mid.packed = std::move(p);
+          mid.kind = "subdivision";
+          mid.features = std::move(feats[f++]);
+          mid.depth = depth;
+          next.back().similarity = metric.similarity(next.back().features, mid.features);
+          next.push_back(std::move(mid));
+        }
+        next.back().similarity = metric.similarity(next.back().features, path[i + 1].features);
         ++k;
       }
     }
     path = std::move(next);
     if (progress) progress(1.0 - double(budget) / std::max(1, o.max_renders));
   }
-  for (auto& w : path) {
+  for (size_t i = 0; i < path.size(); ++i) {
+    Waypoint& w = path[i];
     w.reached = w.jump || w.similarity >= o.threshold;
-    if (w.reached) w.note.clear();
-    else if (w.note.empty()) w.note = "depth cap";
+    if (w.reached) {
+      w.note.clear();
+    } else if (i + 1 < path.size() && ctx.space(w.shader).max_discrete_step(w.packed, path[i + 1].packed) > 0) {
+      // Halving cannot remove a whole step; name the parameter rather than blaming the depth cap.
+      w.note = discrete_note(ctx.space(w.shader).decl(), w.packed, path[i + 1].packed) +
+               (w.note == "render budget" ? " (render budget)" : "");
+    } else if (w.note.empty()) {
+      w.note = "depth cap";
+    }
   }
 }
 
@@ -309,102 +342,137 @@ std::vector<int> apportion(const std::vector<double>& weights, int total) {
   return out;
 }
 
-// Frames from the refined path: anchors (keys, both ends of each jump) get a frame of their own,
-// `dissolve` frames cross-fade each jump, the rest are spread over the continuous pieces in
-// proportion to their perceptual length and evenly in perceptual distance within each piece.
+// Frames from the refined path. The path is cut into units: atoms, which one frame step must
+// cross whole (a jump edge, plus its dissolve frames; a pure whole step of a discrete parameter),
+// and continuous stretches between atoms and keys. Every unit gets its minimum (one step, or
+// dissolve + 1 for a jump); the remaining steps go to the stretches in proportion to their
+// perceptual length, and frames sit at equal perceptual distances within each stretch. So each
+// frame changes about the same amount, and a whole step never shares a frame step with other
+// change. When the frames are too few for that, whole steps are treated as continuous again.
 std::vector<Frame> resample(Context& ctx, const std::vector<Waypoint>& path, const std::vector<Key>& keys, int frames,
-                            int dissolve, uint32_t seed) {
-  std::vector<size_t> anchors;
-  for (size_t i = 0; i < path.size(); ++i)
-    if (path[i].key >= 0 || path[i].jump || (i > 0 && path[i - 1].jump)) anchors.push_back(i);
-  int jumps = 0;
-  std::vector<double> lengths;  // per gap between consecutive anchors (0 for jumps)
-  double total_length = 0;
-  for (size_t k = 0; k + 1 < anchors.size(); ++k) {
-    double L = 0;
-    for (size_t i = anchors[k]; i < anchors[k + 1]; ++i) L += step_length(path[i].similarity);
-    total_length += L;
-    const bool jump = path[anchors[k]].jump;
-    jumps += jump;
-    lengths.push_back(jump ? 0.0 : L);
-  }
-  const int fixed = static_cast<int>(anchors.size()) + jumps * dissolve;
-  if (frames < fixed)
+                            int dissolve, bool blend_steps, uint32_t seed) {
+  struct Unit {
+    bool atom = false, jump = false;
+    size_t first = 0, last = 0;  // waypoints: the unit spans edges first .. last-1
+    double length = 0;
+    int steps = 0;
+  };
+  auto is_step_atom = [&](size_t i) {
+    const MorphSpace& sp = ctx.space(path[i].shader);
+    return sp.max_discrete_step(path[i].packed, path[i + 1].packed) > 0 &&
+           sp.max_continuous_difference(path[i].packed, path[i + 1].packed) < kPureStep;
+  };
+  auto build_units = [&](bool step_atoms) {
+    std::vector<Unit> units;
+    size_t start = 0;
+    for (size_t i = 0; i + 1 < path.size(); ++i) {
+      const bool atom = path[i].jump || (step_atoms && is_step_atom(i));
+      if (atom) {
+        if (i > start) units.push_back({false, false, start, i, 0, 1});
+        units.push_back({true, path[i].jump, i, i + 1, 0, path[i].jump ? dissolve + 1 : 1});
+        start = i + 1;
+      } else if (path[i + 1].key >= 0) {  // keys are frames: a stretch ends there
+        units.push_back({false, false, start, i + 1, 0, 1});
+        start = i + 1;
+      }
+    }
+    for (auto& u : units)
+      for (size_t i = u.first; i < u.last; ++i) u.length += step_length(path[i].similarity);
+    return units;
+  };
+  auto required = [](const std::vector<Unit>& units) {
+    int n = 0;
+    for (const auto& u : units) n += u.steps;
+    return n;
+  };
+  std::vector<Unit> units = build_units(true);
+  if (required(units) > frames - 1) units = build_units(false);
+  const int need = required(units) + 1;
+  if (frames < need) {
+    int jumps = 0;
+    for (const auto& u : units) jumps += u.jump;
     throw UsageError(fmt::format("--frames {} is too few for this morph: it needs at least {} (inputs, both ends of "
-                                 "{} jump(s){})", frames, fixed, jumps, dissolve ? ", dissolve frames" : ""),
-                     fmt::format("use --frames {} or more", fixed));
-  // Jumps take no free frames; their dissolve frames are counted in `fixed`.
-  std::vector<double> weights = lengths;
-  for (size_t k = 0; k + 1 < anchors.size(); ++k)
-    if (path[anchors[k]].jump) weights[k] = 0;
-  bool any_continuous = false;
-  for (size_t k = 0; k + 1 < anchors.size(); ++k) any_continuous |= !path[anchors[k]].jump;
-  std::vector<int> share = apportion(weights, frames - fixed);
-  if (!any_continuous && frames > fixed)  // only jumps: extra frames lengthen the dissolves
-    throw UsageError(fmt::format("this morph is {} frames of jumps; --frames {} leaves frames with nothing to show", fixed, frames),
-                     fmt::format("use --frames {} or a larger --dissolve", fixed));
+                                 "{} jump(s){})", frames, need, jumps, dissolve ? ", dissolve frames" : ""),
+                     fmt::format("use --frames {} or more", need));
+  }
+  std::vector<double> weights;
+  bool any_stretch = false;
+  for (const auto& u : units) {
+    weights.push_back(u.atom ? 0.0 : u.length);
+    any_stretch |= !u.atom;
+  }
+  if (!any_stretch && frames > need)
+    throw UsageError(fmt::format("this morph is {} frames of jumps; --frames {} leaves frames with nothing to show", need, frames),
+                     fmt::format("use --frames {} or a larger --dissolve", need));
+  if (any_stretch) {
+    // Equal shares when every stretch has length 0 (identical keys): only stretches get frames.
+    double sum = 0;
+    for (double w : weights) sum += w;
+    if (sum <= 0)
+      for (size_t k = 0; k < units.size(); ++k) weights[k] = units[k].atom ? 0.0 : 1.0;
+    const auto extra = apportion(weights, frames - need);
+    for (size_t k = 0; k < units.size(); ++k) units[k].steps += extra[k];
+  }
+  double total_length = 0;
+  for (const auto& u : units) total_length += u.length;
+  auto norm = [&](double p) { return total_length > 0 ? p / total_length : 0.0; };
 
   auto frame_at = [&](size_t i, double t, double position) {
     Frame f;
     const Waypoint& w = path[i];
     const MorphSpace& sp = ctx.space(w.shader);
-    std::vector<float> packed = t <= 0 ? w.packed : sp.lerp(w.packed, path[i + 1].packed, t);
-    f.spec = spec_from_packed(sp.decl(), packed, seed);
-    f.position = total_length > 0 ? position / total_length : 0;
-    return f;
-  };
-  auto anchor_frame = [&](size_t i, double position) {
-    const Waypoint& w = path[i];
-    if (w.key >= 0) {  // exactly the input, its own seed
-      Frame f;
-      const MorphSpace& sp = ctx.space(w.shader);
+    f.position = norm(position);
+    if (t <= 0 && w.key >= 0) {  // exactly the input, its own seed
       f.spec = spec_from_packed(sp.decl(), keys[w.key].packed, keys[w.key].spec.seed);
       f.key = w.key;
-      f.position = total_length > 0 ? position / total_length : 0;
       return f;
     }
-    return frame_at(i, 0, position);
+    if (t > 0 && blend_steps && sp.max_discrete_step(w.packed, path[i + 1].packed) > 0) {
+      // A whole step of a discrete parameter cannot be interpolated: the frames inside it
+      // cross-fade the renders of its two ends (each at whole values) instead of popping.
+      f.spec = spec_from_packed(sp.decl(), w.packed, seed);
+      f.blend_to = spec_from_packed(sp.decl(), path[i + 1].packed, seed);
+      f.blend = t;
+      return f;
+    }
+    std::vector<float> packed = t <= 0 ? w.packed : sp.lerp(w.packed, path[i + 1].packed, t);
+    f.spec = spec_from_packed(sp.decl(), packed, seed);
+    return f;
   };
 
   std::vector<Frame> out;
+  out.push_back(frame_at(0, 0, 0));
   double position = 0;
-  out.push_back(anchor_frame(anchors[0], 0));
-  for (size_t k = 0; k + 1 < anchors.size(); ++k) {
-    const size_t a = anchors[k], b = anchors[k + 1];
-    const double gap_start = position;
-    if (path[a].jump) {
-      const double L = step_length(path[a].similarity);
-      Frame from = out.back();
-      for (int d = 1; d <= dissolve; ++d) {
+  for (const auto& u : units) {
+    if (u.atom) {
+      const Frame from = out.back();
+      const Frame to = frame_at(u.last, 0, position + u.length);
+      for (int d = 1; d < u.steps; ++d) {  // dissolve frames
         Frame f = from;
         f.key = -1;
-        f.blend_to = anchor_frame(b, 0).spec;
-        f.blend = double(d) / (dissolve + 1);
+        f.blend_to = to.spec;
+        f.blend = double(d) / u.steps;
         f.jump = d == 1;
-        f.position = total_length > 0 ? (gap_start + L * f.blend) / total_length : 0;
+        f.position = norm(position + u.length * f.blend);
         out.push_back(std::move(f));
       }
-      position += L;
-      Frame f = anchor_frame(b, position);
-      f.jump = dissolve == 0;
-      out.push_back(std::move(f));
+      out.push_back(to);
+      out.back().jump = u.jump && u.steps == 1;
+      position += u.length;
       continue;
     }
-    // Interior frames at equal perceptual steps along the piece.
-    const int m = share[k];
-    double L = 0;
-    for (size_t i = a; i < b; ++i) L += step_length(path[i].similarity);
-    size_t i = a;
-    double walked = 0;  // perceptual length up to waypoint i
-    for (int j = 1; j <= m; ++j) {
-      const double target = L * j / (m + 1);
-      while (i + 1 < b && walked + step_length(path[i].similarity) < target) walked += step_length(path[i++].similarity);
+    // Interior frames at equal perceptual distances along the stretch.
+    size_t i = u.first;
+    double walked = 0;  // perceptual length from u.first to waypoint i
+    for (int j = 1; j < u.steps; ++j) {
+      const double target = u.length * j / u.steps;
+      while (i + 1 < u.last && walked + step_length(path[i].similarity) < target) walked += step_length(path[i++].similarity);
       const double len = step_length(path[i].similarity);
       const double t = len > 0 ? std::clamp((target - walked) / len, 0.0, 1.0) : 0.5;
-      out.push_back(frame_at(i, t, gap_start + target));
+      out.push_back(t >= 1 ? frame_at(i + 1, 0, position + target) : frame_at(i, t, position + target));
     }
-    position = gap_start + L;
-    out.push_back(anchor_frame(b, position));
+    position += u.length;
+    out.push_back(frame_at(u.last, 0, position));
   }
   return out;
 }
@@ -460,7 +528,7 @@ nlohmann::json Morph::summary() const {
           {"options",
            {{"frames", options.frames}, {"power", options.power}, {"threshold", options.threshold},
             {"max_depth", options.max_depth}, {"max_renders", options.max_renders}, {"dissolve", options.dissolve},
-            {"connective", options.connective}}},
+            {"connective", options.connective}, {"blend_steps", options.blend_steps}}},
           {"waypoints", path.size()},
           {"unreached", unreached()},
           {"quality", quality_json()},
@@ -599,7 +667,7 @@ Morph plan(const std::vector<TextureSpec>& inputs, catalog::Store& store, Render
   const auto t_sub = Clock::now();
   subdivide(ctx, m.path, o, m.seed, m.resolution, [&](double f) { report("subdivide", f); });
   report("frames", 0);
-  m.frames = resample(ctx, m.path, keys, o.frames, o.dissolve, m.seed);
+  m.frames = resample(ctx, m.path, keys, o.frames, o.dissolve, o.blend_steps, m.seed);
   m.stats = {{"segments", segments},
              {"graph_waypoints", graph_waypoints},
              {"renders", {{"keys_and_path", path_renders}, {"subdivision", ctx.renders - path_renders}}},

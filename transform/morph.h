@@ -22,7 +22,11 @@
 //   4. frame timing: exactly `frames` frames, spaced evenly in perceptual distance (the metric's
 //      distance -ln S summed along the path), keys and jump ends on frames of their own, `dissolve`
 //      cross-faded frames at each jump;
-//   5. spatial coherence: one seed (the first input's) and one texture domain for every frame but
+//   5. whole steps: a discrete parameter (rows, an enum) changes by one whole value at a time;
+//      with `blend_steps` the frames that fall inside such a step cross-fade the renders of its
+//      two ends instead of popping. Off by default: measured, the cross-fades are less similar to
+//      their neighbours than the pop itself (docs/morph.md), though the layout changes less;
+//   6. spatial coherence: one seed (the first input's) and one texture domain for every frame but
 //      the keys themselves, so noise layouts do not jump between similar frames.
 #include <functional>
 #include <optional>
@@ -46,6 +50,7 @@ struct MorphOptions {
   int max_renders = 800;    // subdivision renders for the whole morph
   int dissolve = 0;         // cross-faded frames at each jump
   bool connective = true;   // cross-shader segments may pass through other linked shaders
+  bool blend_steps = false;  // frames inside a whole step of a discrete parameter cross-fade its ends
   int jobs = 0;             // metric threads (0: all cores)
 };
 

@@ -36,6 +36,24 @@ double MorphSpace::max_continuous_difference(const std::vector<float>& a, const 
   return m;
 }
 
+std::vector<double> MorphSpace::discrete_crossings(const std::vector<float>& a, const std::vector<float>& b) const {
+  const auto ua = to_unit(a), ub = to_unit(b);
+  std::vector<double> out;
+  for (size_t i = 0; i < ua.size(); ++i) {
+    const int levels = space_->dims()[i].levels;
+    if (!levels || ua[i] == ub[i]) continue;
+    // Bin k covers [k / levels, (k + 1) / levels): every boundary between the two bins.
+    const int ka = std::clamp(static_cast<int>(std::floor(ua[i] * levels)), 0, levels - 1);
+    const int kb = std::clamp(static_cast<int>(std::floor(ub[i] * levels)), 0, levels - 1);
+    for (int k = std::min(ka, kb) + 1; k <= std::max(ka, kb); ++k) {
+      const double t = (double(k) / levels - ua[i]) / (ub[i] - ua[i]);
+      if (t > 0 && t < 1) out.push_back(t);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<float> MorphSpace::lerp(const std::vector<float>& a, const std::vector<float>& b, double t) const {
   auto ua = to_unit(a);
   const auto ub = to_unit(b);

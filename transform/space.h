@@ -30,6 +30,9 @@ class MorphSpace {
   int max_discrete_step(const std::vector<float>& a, const std::vector<float>& b) const;
   // Largest difference of a continuous coordinate (unit space).
   double max_continuous_difference(const std::vector<float>& a, const std::vector<float>& b) const;
+  // Every t in (0, 1) where a discrete parameter changes its whole value along the straight line
+  // from a to b in unit coordinates, ascending.
+  std::vector<double> discrete_crossings(const std::vector<float>& a, const std::vector<float>& b) const;
   // Linear interpolation in unit coordinates; discrete values snap to their bins.
   std::vector<float> lerp(const std::vector<float>& a, const std::vector<float>& b, double t) const;
   // `packed` with its non-searchable parameters taken from `from` (the catalogue samples only

@@ -170,7 +170,9 @@ TEST_F(Transform, WithinShaderEndsOnTheInputsAndEveryEdgeMeetsTheThresholdOrIsRe
     EXPECT_EQ(m.frames[i].spec.seed, 3u);
     const float r = resolve(decl, m.frames[i].spec)[rows->offset];
     EXPECT_EQ(r, std::round(r)) << "frame " << i << " has a non-integer row count";
-    if (i > 0) EXPECT_GE(m.frames[i].position, m.frames[i - 1].position);
+    if (i > 0) {
+      EXPECT_GE(m.frames[i].position, m.frames[i - 1].position);
+    }
   }
 }
 
@@ -182,14 +184,19 @@ TEST_F(Transform, KeyTexturesAppearInOrder) {
   ASSERT_EQ(m.frames.size(), 30u);
   std::vector<int> seen;
   for (const auto& f : m.frames)
-    if (f.key >= 0) seen.push_back(f.key);
+    if (f.key >= 0) {
+      seen.push_back(f.key);
+    }
   ASSERT_EQ(seen, (std::vector<int>{0, 1, 2}));
   for (const auto& f : m.frames)
     if (f.key >= 0) expect_same_texture(f.spec, keys[f.key]);
 }
 
 TEST_F(Transform, FramesAreEvenInPerceptualDistanceAndBeatLinearInterpolation) {
-  const auto a = spec("bricks:rows=3,mortar=0.02,seed=2"), b = spec("bricks:rows=24,mortar=0.25,seed=2");
+  // Continuous parameters whose look changes unevenly along a straight line: even perceptual
+  // spacing must lower the largest step. (When a whole step of an integer dominates, both
+  // sequences contain the same step; see DiscreteParametersChangeOneWholeStepAtATime.)
+  const auto a = spec("bricks:mortar=0.02,wear=0,seed=2"), b = spec("bricks:mortar=0.4,wear=1,seed=2");
   catalog::Store store(db(), catalog::Store::Access::Read);
   Morph m = plan({a, b}, store, renderer_, quick(32));
   m.quality = measure(m.frames, renderer_, m.resolution, 2);
@@ -203,6 +210,29 @@ TEST_F(Transform, FramesAreEvenInPerceptualDistanceAndBeatLinearInterpolation) {
   EXPECT_LT(m.quality->max_dissimilarity, m.linear->max_dissimilarity)
       << "morph " << m.quality->to_json() << " linear " << m.linear->to_json();
   EXPECT_TRUE(m.quality_json()["beats_linear_on_max"].get<bool>());
+}
+
+TEST_F(Transform, DiscreteParametersChangeOneWholeStepAtATime) {
+  const auto a = spec("bricks:rows=3,mortar=0.03,seed=2"), b = spec("bricks:rows=13,mortar=0.3,seed=2");
+  catalog::Store store(db(), catalog::Store::Access::Read);
+  const Morph m = plan({a, b}, store, renderer_, quick(30));
+  const ShaderDecl& decl = ShaderLibrary::builtin().get("bricks");
+  const int rows = decl.find("rows")->offset;
+  // Every whole step is cut out as its own edge (a pure step: nothing else changes across it).
+  const MorphSpace sp(decl);
+  int steps = 0;
+  for (size_t i = 0; i + 1 < m.path.size(); ++i)
+    if (sp.max_discrete_step(m.path[i].packed, m.path[i + 1].packed) > 0) {
+      ++steps;
+      EXPECT_EQ(sp.max_discrete_step(m.path[i].packed, m.path[i + 1].packed), 1);
+      EXPECT_LT(sp.max_continuous_difference(m.path[i].packed, m.path[i + 1].packed), 1e-3);
+    }
+  EXPECT_EQ(steps, 10);
+  // With enough frames, each frame step crosses at most one whole step.
+  for (size_t i = 1; i < m.frames.size(); ++i) {
+    const float r0 = resolve(decl, m.frames[i - 1].spec)[rows], r1 = resolve(decl, m.frames[i].spec)[rows];
+    EXPECT_LE(std::fabs(r1 - r0), 1.0f) << "frames " << i - 1 << " -> " << i;
+  }
 }
 
 TEST_F(Transform, TooFewFramesAndBadInputsAreUsageErrors) {
@@ -268,7 +298,9 @@ TEST_F(Transform, CrossShaderSequenceUsesAJumpEdge) {
   EXPECT_EQ(dissolves, 2);
   // Subdivision never crosses the jump edge: the waypoints on both sides keep their shaders.
   for (size_t i = 0; i + 1 < m.path.size(); ++i)
-    if (m.path[i].shader != m.path[i + 1].shader) EXPECT_TRUE(m.path[i].jump);
+    if (m.path[i].shader != m.path[i + 1].shader) {
+      EXPECT_TRUE(m.path[i].jump);
+    }
 }
 
 TEST_F(Transform, ConnectiveShaderCarriesRectangleToCircle) {
