@@ -12,6 +12,11 @@
 namespace proctex::search {
 namespace {
 
+// The grey each colour is set to for its basis image. Not white: shaders vary a colour's
+// brightness (up to 2x) and clamp to [0, 1], which would bend a white basis; a dark grey stays
+// in the linear range.
+constexpr float kBasisLevel = 0.25f;
+
 float luminance(const float* rgb) { return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2]; }
 
 // Free colour parameters: searchable and not pinned by --fix.
@@ -158,7 +163,7 @@ ColourTarget make_colour_target(const Image& image, int resolution) {
 
 long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts) {
   const auto k = free_colours(decl, pinned).size();
-  return static_cast<long>(starts * (k ? k + 2 : 1));
+  return static_cast<long>(starts * (k ? k + 3 : 1));
 }
 
 std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vector<std::vector<float>>& packed,
@@ -166,7 +171,7 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
                                          const ColourTarget& target, Renderer& renderer, bool polish_fit) {
   const auto colours = free_colours(decl, pinned);
   const size_t k = colours.size();
-  // One launch: per start, all free colours black, each colour white alone, and the start itself.
+  // One launch: per start, all free colours black, each colour grey alone, and the start itself.
   std::vector<std::vector<float>> batch;
   std::vector<uint32_t> batch_seeds;
   for (size_t s = 0; s < packed.size(); ++s) {
@@ -174,12 +179,18 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
       for (size_t white = 0; white <= k; ++white) {  // white == k: all black
         auto p = packed[s];
         for (size_t j = 0; j < k; ++j)
-          for (int ch = 0; ch < 3; ++ch) p[colours[j]->offset + ch] = j == white ? 1.0f : 0.0f;
+          for (int ch = 0; ch < 3; ++ch) p[colours[j]->offset + ch] = j == white ? kBasisLevel : 0.0f;
         batch.push_back(std::move(p));
       }
     }
     batch.push_back(packed[s]);
-    batch_seeds.insert(batch_seeds.end(), k ? k + 2 : 1, seeds[s]);
+    if (k) {  // the linearity check: the start's colours halved, inside the range no shader clamps
+      auto p = packed[s];
+      for (const auto* c : colours)
+        for (int ch = 0; ch < 3; ++ch) p[c->offset + ch] *= 0.5f;
+      batch.push_back(std::move(p));
+    }
+    batch_seeds.insert(batch_seeds.end(), k ? k + 3 : 1, seeds[s]);
   }
   RenderSettings settings;
   settings.width = settings.height = target.resolution;
@@ -200,11 +211,12 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
     model.offset = images[at + k];
     for (size_t j = 0; j < k; ++j) {
       Image w = images[at + j];
-      for (size_t i = 0; i < w.pixels.size(); ++i) w.pixels[i] -= model.offset.pixels[i];
+      for (size_t i = 0; i < w.pixels.size(); ++i) w.pixels[i] = (w.pixels[i] - model.offset.pixels[i]) / kBasisLevel;
       model.weights.push_back(std::move(w));
     }
     const Image& actual = images[at + k + 1];
-    at += k + 2;
+    const Image& check = images[at + k + 2];
+    at += k + 3;
     std::vector<double> start;
     for (const auto* c : colours)
       for (int ch = 0; ch < 3; ++ch) {
@@ -212,13 +224,16 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
         model.lower.push_back(c->min);
         model.upper.push_back(c->max);
       }
-    // Linearity check at the start's own colours: a shader that transforms its colours (contrast,
-    // hue shifts, colour-dependent masks) would make the basis lie.
-    const Image predicted = model.combine(start);
+    // Linearity check at half the start's colours: a shader that transforms its colours
+    // (contrast, hue shifts, colour-dependent masks) would make the basis lie. (At the start's own
+    // colours a shader may clamp bright pixels; the fit's colours are re-rendered by the refinement.)
+    std::vector<double> halved = start;
+    for (auto& v : halved) v *= 0.5;
+    const Image predicted = model.combine(halved);
     float peak = 1.0f;
-    for (size_t i = 0; i < actual.pixels.size(); ++i) {
-      peak = std::max(peak, std::fabs(actual.pixels[i]));
-      r.linearity_error = std::max<double>(r.linearity_error, std::fabs(predicted.pixels[i] - actual.pixels[i]));
+    for (size_t i = 0; i < check.pixels.size(); ++i) {
+      peak = std::max(peak, std::fabs(check.pixels[i]));
+      r.linearity_error = std::max<double>(r.linearity_error, std::fabs(predicted.pixels[i] - check.pixels[i]));
     }
     r.preview = actual;
     r.before = r.after = colour_similarity(target, actual);

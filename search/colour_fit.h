@@ -4,9 +4,9 @@
 // metrics see lightness, so a wrong colour also changes contrast and polarity. Most shaders mix
 // their colour parameters linearly, per channel, by masks and shading:
 //     image(x) = b(x) + sum_j w_j(x) * colour_j
-// so K + 1 renders (all colours black; then each colour white alone) give the basis b, w_j, and
+// so K + 1 renders (all colours black; then each colour alone at a dark grey) give the basis b, w_j, and
 // any choice of colours is a weighted sum of images - no further renders. One extra render at
-// the start's own colours checks the linearity; a shader that is not linear in its colours is
+// half the start's colours checks the linearity; a shader that is not linear in its colours is
 // left alone (the refinement still searches its colours, only more slowly).
 //
 // The fit itself is closed-form histogram matching projected on the linear model: rank the
@@ -38,12 +38,12 @@ struct ColourFitResult {
   bool fitted = false;           // false: no free colour, or the shader is not linear in them
   double before = 0.0;           // colour similarity at the start's colours
   double after = 0.0;            // ... at the fitted colours
-  double linearity_error = 0.0;  // max |prediction - render| at the start's colours
+  double linearity_error = 0.0;  // max |prediction - render| at half the start's colours
   Image preview;                 // the image at the fitted colours (the render when not fitted)
 };
 
 // Fits the free colours (searchable, not in `pinned`) of each start; all bases are rendered in
-// one launch at the target's resolution (so `packed.size() * (K + 2)` renders). `polish` adds an
+// one launch at the target's resolution (so `packed.size() * (K + 3)` renders). `polish` adds an
 // NLopt pass on the colour metric (about a thousand cheap evaluations, no renders).
 std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vector<std::vector<float>>& packed,
                                          const std::vector<uint32_t>& seeds, const std::vector<std::string>& pinned,
