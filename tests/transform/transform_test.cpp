@@ -291,8 +291,9 @@ TEST_F(Transform, CrossShaderSequenceUsesAJumpEdge) {
   for (size_t i = 1; i < m.frames.size(); ++i) {
     jump_frames += m.frames[i].jump;
     dissolves += m.frames[i].blend_to.has_value();
-    if (!m.frames[i].blend_to && !m.frames[i].jump && m.frames[i - 1].blend_to == std::nullopt)
+    if (!m.frames[i].blend_to && !m.frames[i].jump && m.frames[i - 1].blend_to == std::nullopt) {
       EXPECT_EQ(m.frames[i].spec.shader, m.frames[i - 1].spec.shader) << "shader changes only at the jump";
+    }
   }
   EXPECT_EQ(jump_frames, 1);
   EXPECT_EQ(dissolves, 2);
