@@ -18,4 +18,8 @@ for b in "$build"/bench/bench_metrics*; do
   echo "== $b"
   "$b"
 done
+if [[ -x "$build/bench/bench_morph" ]]; then
+  echo "== $build/bench/bench_morph (120 frames at 512x512, builds a bricks catalogue first)"
+  "$build/bench/bench_morph" --repetitions 3 --markdown "$results/morph.md"
+fi
 echo "bench: tables in $results/"
