@@ -37,6 +37,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/error.h"
@@ -108,6 +109,71 @@ double max_channel_std(const Image& img) {
     best = std::max(best, std::sqrt(std::max(0.0, m2 / n - m * m)));
   }
   return best;
+}
+
+
+// Item cache (--save-items / --load-items): the colour items with their labels and linear RGB
+// pixels, so that feature experiments need not re-render (~5 min). Raw little-endian binary.
+void write_string(std::FILE* f, const std::string& s) {
+  const uint32_t n = static_cast<uint32_t>(s.size());
+  std::fwrite(&n, 4, 1, f);
+  std::fwrite(s.data(), 1, n, f);
+}
+std::string read_string(std::FILE* f) {
+  uint32_t n = 0;
+  if (std::fread(&n, 4, 1, f) != 1) throw Error("truncated item cache");
+  std::string s(n, '\0');
+  if (n && std::fread(s.data(), 1, n, f) != n) throw Error("truncated item cache");
+  return s;
+}
+void save_items(const std::string& path, const std::vector<Item>& items) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw Error("cannot write " + path);
+  const uint64_t n = items.size();
+  std::fwrite(&n, 8, 1, f);
+  for (const Item& it : items) {
+    write_string(f, it.texture);
+    write_string(f, it.source);
+    const int32_t hdr[3] = {it.split, it.image.width, it.image.height};
+    std::fwrite(hdr, 4, 3, f);
+    std::fwrite(it.image.pixels.data(), 4, it.image.pixels.size(), f);
+  }
+  std::fclose(f);
+}
+std::vector<Item> load_items(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw Error("cannot read " + path);
+  uint64_t n = 0;
+  if (std::fread(&n, 8, 1, f) != 1) throw Error("truncated item cache");
+  std::vector<Item> items(n);
+  for (Item& it : items) {
+    it.texture = read_string(f);
+    it.source = read_string(f);
+    int32_t hdr[3];
+    if (std::fread(hdr, 4, 3, f) != 3) throw Error("truncated item cache");
+    it.split = hdr[0];
+    it.image = Image(hdr[1], hdr[2]);
+    if (std::fread(it.image.pixels.data(), 4, it.image.pixels.size(), f) != it.image.pixels.size())
+      throw Error("truncated item cache");
+  }
+  std::fclose(f);
+  return items;
+}
+
+// --dump-features: every item's composite feature vector with its labels (text, one item a
+// line: texture source split grey values...), for offline experiments with the distances.
+void dump_features(const std::string& path, const std::vector<Item>& items,
+                   const std::vector<std::vector<std::vector<float>>>& f) {
+  std::FILE* out = std::fopen(path.c_str(), "w");
+  if (!out) throw Error("cannot write " + path);
+  for (size_t i = 0; i < items.size(); ++i) {
+    std::fprintf(out, "%s %s %d %d", items[i].texture.c_str(), items[i].source.c_str(), items[i].split,
+                 items[i].grey ? 1 : 0);
+    for (const auto& comp : f)
+      for (float v : comp[i]) std::fprintf(out, " %.9g", v);
+    std::fprintf(out, "\n");
+  }
+  std::fclose(out);
 }
 
 #ifdef PROCTEX_BENCH_SHADERS
@@ -199,6 +265,24 @@ std::vector<Item> shader_items(int specs, int neighbours, double perturb, int re
   }
   return items;
 }
+
+// Every library shader (shapes included) at its defaults, seed 1: the items of the library's
+// distinctness test (tests/library/distinct_test.cpp), for --dump-features.
+std::vector<Item> default_items(int resolution) {
+  std::vector<Item> items;
+  Renderer renderer;
+  RenderSettings st;
+  st.width = st.height = resolution;
+  for (const ShaderDecl& decl : renderer.library().shaders()) {
+    Item it;
+    it.texture = "default:" + decl.name;
+    it.source = decl.name;
+    it.split = 3;
+    it.image = renderer.render_batch(decl, {decl.default_packed()}, {1}, st).front();
+    items.push_back(std::move(it));
+  }
+  return items;
+}
 #endif
 
 // Per-component features of every item, and each component's feature time.
@@ -228,25 +312,68 @@ FeatureTable compute_features(const metrics::CompositeMetric& composite, const s
       t.ms[c] += std::chrono::duration<double, std::milli>(clock::now() - a).count();
     }
   }
-  t.prepare_ms /= items.size();
-  for (double& m : t.ms) m /= items.size();
+  if (!items.empty()) {
+    t.prepare_ms /= items.size();
+    for (double& m : t.ms) m /= items.size();
+  }
   return t;
 }
 
-// Scaled distance matrices d_k / scale_k (so that S_k = exp(-D)), one per component.
-std::vector<std::vector<float>> distance_matrices(const FeatureTable& t, const std::vector<Item>& items) {
-  const size_t n = t.f[0].size();
-  std::vector<std::vector<float>> d(t.metrics.size(), std::vector<float>(n * n, 0.0f));
-  for (size_t c = 0; c < t.metrics.size(); ++c) {
-    const metrics::Metric& m = *t.metrics[c];
-    for (size_t i = 0; i < n; ++i)
-      for (size_t j = i + 1; j < n; ++j) {
-        if (items[i].grey != items[j].grey) continue;  // pools never mix colour and grey
-        // -ln S: exactly what similarity() ranks by (canonical order, equal vectors -> 0).
-        const double s = m.similarity(t.f[c][i], t.f[c][j]);
-        d[c][i * n + j] = d[c][j * n + i] = static_cast<float>(-std::log(s));
+// One retrieval pool (items of one colour mode and some splits) with every pair's distances:
+// per feature group of the composite (G) and per component as -ln S_k (C), both n x n.
+struct Pool {
+  std::vector<int> idx;
+  std::vector<std::vector<float>> G, C;
+  std::vector<char> rel;  // same texture
+  size_t n() const { return idx.size(); }
+};
+
+Pool make_pool(const metrics::CompositeMetric& composite, const FeatureTable& t, const std::vector<Item>& items,
+               std::initializer_list<int> splits, bool grey) {
+  Pool p;
+  for (size_t i = 0; i < items.size(); ++i)
+    if (items[i].grey == grey && std::find(splits.begin(), splits.end(), items[i].split) != splits.end())
+      p.idx.push_back(static_cast<int>(i));
+  const size_t n = p.n(), k = t.metrics.size(), ng = composite.group_count();
+  p.G.assign(ng, std::vector<float>(n * n, 0.0f));
+  p.C.assign(k, std::vector<float>(n * n, 0.0f));
+  p.rel.assign(n * n, 0);
+  std::vector<double> g(ng);
+  std::vector<std::vector<float>> cat(n);  // composite feature vectors
+  for (size_t a = 0; a < n; ++a)
+    for (size_t c = 0; c < k; ++c) cat[a].insert(cat[a].end(), t.f[c][p.idx[a]].begin(), t.f[c][p.idx[a]].end());
+  for (size_t a = 0; a < n; ++a) {
+    const std::vector<float>& fa = cat[a];
+    for (size_t b = a + 1; b < n; ++b) {
+      const std::vector<float>& fb = cat[b];
+      // Canonical order, as similarity() does, so the matrices hold exactly what it ranks by.
+      const bool swap = std::lexicographical_compare(fb.begin(), fb.end(), fa.begin(), fa.end());
+      const std::vector<float>& x = swap ? fb : fa;
+      const std::vector<float>& y = swap ? fa : fb;
+      composite.group_distances(x, y, g.data());
+      for (size_t q = 0; q < ng; ++q) p.G[q][a * n + b] = p.G[q][b * n + a] = static_cast<float>(g[q]);
+      for (size_t c = 0; c < k; ++c) {
+        const double s = t.metrics[c]->similarity(t.f[c][p.idx[a]], t.f[c][p.idx[b]]);
+        p.C[c][a * n + b] = p.C[c][b * n + a] = static_cast<float>(-std::log(s));
       }
+      p.rel[a * n + b] = p.rel[b * n + a] = items[p.idx[a]].texture == items[p.idx[b]].texture;
+    }
   }
+  return p;
+}
+
+// A ranking: distance = sum_m w_m M_m over the pool's group (G) or component (C) matrices.
+struct Ranking {
+  bool groups = false;
+  std::vector<double> w;
+};
+
+std::vector<double> fused(const Pool& p, const Ranking& r) {
+  const auto& M = r.groups ? p.G : p.C;
+  std::vector<double> d(p.n() * p.n(), 0.0);
+  for (size_t m = 0; m < M.size(); ++m)
+    if (r.w[m] != 0)
+      for (size_t i = 0; i < d.size(); ++i) d[i] += r.w[m] * M[m][i];
   return d;
 }
 
@@ -255,38 +382,31 @@ struct Score {
   int queries = 0;
 };
 
-// Retrieval in `pool` (item indices) with distance sum_k w_k D_k. `per_source` (optional)
-// collects top-1 hits and queries per item source.
-Score evaluate(const std::vector<std::vector<float>>& D, size_t n, const std::vector<double>& w,
-               const std::vector<int>& pool, const std::vector<Item>& items,
+// Every item queries all others of the pool; relevant = its texture's other items. Top-1 and MRR
+// of the first relevant item, ties pessimistic. `per_source` (optional) collects top-1 hits and
+// queries per item source.
+Score evaluate(const Pool& p, const Ranking& rk, const std::vector<Item>& items,
                std::map<std::string, std::pair<int, int>>* per_source = nullptr) {
+  const std::vector<double> d = fused(p, rk);
+  const size_t n = p.n();
   Score r;
-  for (int q : pool) {
-    // Best relevant and irrelevant distances, and how many irrelevant items beat the best relevant.
-    std::vector<std::pair<double, bool>> ranked;
-    ranked.reserve(pool.size());
-    bool any = false;
-    for (int j : pool) {
-      if (j == q) continue;
-      double d = 0;
-      for (size_t c = 0; c < D.size(); ++c)
-        if (w[c] != 0) d += w[c] * D[c][static_cast<size_t>(q) * n + j];
-      const bool rel = items[j].texture == items[q].texture;
-      any |= rel;
-      ranked.push_back({d, rel});
-    }
-    if (!any) continue;
+  for (size_t q = 0; q < n; ++q) {
     double best_rel = 1e300;
-    for (auto& p : ranked)
-      if (p.second) best_rel = std::min(best_rel, p.first);
+    bool any = false;
+    for (size_t j = 0; j < n; ++j)
+      if (j != q && p.rel[q * n + j]) {
+        best_rel = std::min(best_rel, d[q * n + j]);
+        any = true;
+      }
+    if (!any) continue;
     int better = 0;  // irrelevant items at a distance <= the best relevant one (pessimistic ties)
-    for (auto& p : ranked)
-      if (!p.second && p.first <= best_rel) ++better;
+    for (size_t j = 0; j < n; ++j)
+      if (j != q && !p.rel[q * n + j] && d[q * n + j] <= best_rel) ++better;
     ++r.queries;
     r.mrr += 1.0 / (better + 1);
     if (better == 0) r.top1 += 1;
     if (per_source) {
-      auto& ps = (*per_source)[items[q].source];
+      auto& ps = (*per_source)[items[p.idx[q]].source];
       ps.first += better == 0;
       ps.second += 1;
     }
@@ -298,26 +418,38 @@ Score evaluate(const std::vector<std::vector<float>>& D, size_t n, const std::ve
   return r;
 }
 
-std::vector<int> pool_of(const std::vector<Item>& items, std::initializer_list<int> splits, bool grey) {
-  std::vector<int> p;
-  for (size_t i = 0; i < items.size(); ++i)
-    if (items[i].grey == grey && std::find(splits.begin(), splits.end(), items[i].split) != splits.end())
-      p.push_back(static_cast<int>(i));
-  return p;
+// Median fused distance between two items of one texture.
+double median_same(const Pool& p, const Ranking& rk) {
+  const std::vector<double> d = fused(p, rk);
+  std::vector<double> v;
+  const size_t n = p.n();
+  for (size_t a = 0; a < n; ++a)
+    for (size_t b = a + 1; b < n; ++b)
+      if (p.rel[a * n + b]) v.push_back(d[a * n + b]);
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
 }
 
-std::string weights_str(const std::vector<double>& w) {
-  std::string s;
-  for (double x : w) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "%s%.2f", s.empty() ? "" : " / ", x);
-    s += buf;
-  }
-  return s;
+// Highest similarity exp(-sqrt(d) / scale) of the grouped form between two different items of the
+// pool (library defaults).
+double max_similarity(const Pool& p, const Ranking& rk, double scale, const std::vector<Item>& items,
+                      std::string* pair = nullptr) {
+  const std::vector<double> d = fused(p, rk);
+  const size_t n = p.n();
+  double best = 0;
+  for (size_t a = 0; a < n; ++a)
+    for (size_t b = a + 1; b < n; ++b) {
+      const double s = std::exp(-std::sqrt(d[a * n + b]) / scale);
+      if (s > best) {
+        best = s;
+        if (pair) *pair = items[p.idx[a]].source + " / " + items[p.idx[b]].source;
+      }
+    }
+  return best;
 }
 
 }  // namespace
-
 int main(int argc, char** argv) {
 #ifdef PROCTEX_SHARED_DIR
   std::string shared = PROCTEX_SHARED_DIR;
@@ -325,10 +457,12 @@ int main(int argc, char** argv) {
   std::string shared = "../shared";
 #endif
   int resolution = metrics::kDefaultResolution;
-  int specs = 8, grid = 4, neighbours = 2;
-  double step = 0.05, perturb = 0.15;
-  bool shaders = true, structure_groups = false;
+  int specs = 8, grid = 4, neighbours = 2, fit_passes = 0;
+  double perturb = 0.15, max_default_similarity = 0.55;
+  bool shaders = true;
   std::set<std::string> skip;
+  std::string save_path, load_path, dump_path;
+  bool dump_only = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--shared") && i + 1 < argc) shared = argv[++i];
     else if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc) resolution = std::atoi(argv[++i]);
@@ -336,25 +470,33 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--neighbours") && i + 1 < argc) neighbours = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--perturb") && i + 1 < argc) perturb = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--step") && i + 1 < argc) step = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--step") && i + 1 < argc) ++i;  // the old component grid search; ignored
+    else if (!std::strcmp(argv[i], "--fit-groups")) fit_passes = 6;
+    else if (!std::strcmp(argv[i], "--fit-passes") && i + 1 < argc) fit_passes = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--max-default-similarity") && i + 1 < argc) max_default_similarity = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--skip") && i + 1 < argc) skip.insert(argv[++i]);
     else if (!std::strcmp(argv[i], "--no-shaders")) shaders = false;
-    else if (!std::strcmp(argv[i], "--structure-groups")) structure_groups = true;
+    else if (!std::strcmp(argv[i], "--save-items") && i + 1 < argc) save_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--load-items") && i + 1 < argc) load_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--dump-features") && i + 1 < argc) dump_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--dump-only")) dump_only = true;
     else {
       std::fprintf(stderr,
                    "usage: %s [--shared DIR] [--resolution N] [--specs K] [--neighbours M] [--perturb SIGMA] "
-                   "[--grid G] [--step W] "
-                   "[--no-shaders] [--skip SHADER]...\n",
+                   "[--grid G] [--fit-groups] [--fit-passes P] [--max-default-similarity S] "
+                   "[--no-shaders] [--skip SHADER]... [--save-items FILE | --load-items FILE] "
+                   "[--dump-features FILE [--dump-only]]\n",
                    argv[0]);
       return 2;
     }
   }
   try {
     const auto& composite = dynamic_cast<const metrics::CompositeMetric&>(metrics::default_metric());
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines as they come, also into a file
     std::printf("# Texture retrieval, analysis resolution %d\n", resolution);
-    std::vector<Item> items = photo_items(shared, grid);
+    std::vector<Item> items = load_path.empty() ? photo_items(shared, grid) : load_items(load_path);
 #ifdef PROCTEX_BENCH_SHADERS
-    if (shaders) {
+    if (shaders && load_path.empty()) {
       std::vector<Item> rendered = shader_items(specs, neighbours, perturb, resolution, skip);
       for (Item& it : rendered) items.push_back(std::move(it));
     }
@@ -364,6 +506,7 @@ int main(int argc, char** argv) {
     (void)neighbours;
     (void)perturb;
 #endif
+    if (!save_path.empty()) save_items(save_path, items);
     const size_t colour_n = items.size();
     for (size_t i = 0; i < colour_n; ++i) {
       Item g = items[i];
@@ -371,121 +514,94 @@ int main(int argc, char** argv) {
       g.grey = true;
       items.push_back(std::move(g));
     }
+#ifdef PROCTEX_BENCH_SHADERS
+    if (shaders)
+      for (Item& it : default_items(resolution)) items.push_back(std::move(it));  // split 3
+#endif
     const FeatureTable t = compute_features(composite, items, resolution);
-    const auto D = distance_matrices(t, items);
-    const size_t n = items.size(), k = t.metrics.size();
-
-    // Weights: grid search over the simplex on the tune split (colour and grey), never the photos.
-    const std::vector<int> tune_c = pool_of(items, {kTune}, false), tune_g = pool_of(items, {kTune}, true);
-    std::vector<double> best_w(k, 1.0 / k);
-    double best = -1, best_top1 = -1;
-    std::vector<double> current;
-    for (const auto& c : composite.components()) current.push_back(c.weight);
-    const int steps = static_cast<int>(std::lround(1.0 / step));
-    if (!tune_c.empty()) {
-      std::vector<int> idx(k, 0);
-      std::function<void(size_t, int)> rec = [&](size_t c, int left) {
-        if (c + 1 == k) {
-          idx[c] = left;
-          std::vector<double> w(k);
-          for (size_t i = 0; i < k; ++i) w[i] = idx[i] * step;
-          const Score a = evaluate(D, n, w, tune_c, items), b = evaluate(D, n, w, tune_g, items);
-          const double obj = 0.5 * (a.mrr + b.mrr), top1 = 0.5 * (a.top1 + b.top1);
-          if (obj > best + 1e-12 || (std::abs(obj - best) <= 1e-12 && top1 > best_top1)) {
-            best = obj;
-            best_top1 = top1;
-            best_w = w;
-          }
-          return;
-        }
-        for (int v = 0; v <= left; ++v) {
-          idx[c] = v;
-          rec(c + 1, left - v);
-        }
-      };
-      rec(0, steps);
-      std::printf("\nWeight fit (grid step %.2f on the tune split, %zu + %zu queries, objective mean MRR "
-                  "colour/grey): best %s -> MRR %.3f, top-1 %.1f%%\n",
-                  step, tune_c.size(), tune_g.size(), weights_str(best_w).c_str(), best, 100 * best_top1);
+    if (!dump_path.empty()) {
+      dump_features(dump_path, items, t.f);
+      if (dump_only) return 0;
     }
+    const size_t k = t.metrics.size(), ng = composite.group_count();
 
-    if (structure_groups) {
-      // Each structure feature group alone (unit-scaled mean square), on the tune split; then a
-      // coordinate-descent fit of the group weights on the same split (structure alone, MRR).
-      size_t sc = 0;
-      while (sc < k && t.metrics[sc]->id() != "structure") ++sc;
-      const std::vector<int> pool = tune_g;
-      const auto groups = metrics::StructureMetric::groups();
-      std::vector<std::vector<float>> G(groups.size(), std::vector<float>(n * n, 0.0f));
-      size_t at = 0;
-      for (size_t gi = 0; gi < groups.size(); ++gi) {
-        const auto& g = groups[gi];
-        for (int i : pool)
-          for (int j : pool) {
-            double s2 = 0;
-            for (int e = 0; e < g.size; ++e) {
-              const double d = (static_cast<double>(t.f[sc][i][at + e]) - t.f[sc][j][at + e]) / g.unit;
-              s2 += d * d;
-            }
-            G[gi][static_cast<size_t>(i) * n + j] = static_cast<float>(s2 / g.size);
-          }
-        at += g.size;
-      }
-      std::printf("\nStructure groups (tune split):\n\n| group | top-1 alone | MRR alone | current weight |\n|---|---|---|---|\n");
-      std::vector<double> gw;
-      for (size_t gi = 0; gi < groups.size(); ++gi) {
-        std::vector<double> w(groups.size(), 0.0);
-        w[gi] = 1.0;
-        const Score r = evaluate(G, n, w, pool, items);
-        std::printf("| %s | %.1f%% | %.3f | %.2f |\n", groups[gi].name, 100 * r.top1, r.mrr, groups[gi].weight);
-        gw.push_back(groups[gi].weight);
-      }
-      // Ranking by sum w_g ms_g equals ranking by the structure distance sqrt(sum w ms / sum w).
-      double best_g = evaluate(G, n, gw, pool, items).mrr;
-      std::printf("\ncurrent group weights: MRR %.3f\n", best_g);
-      const double options[] = {0.0, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0};
-      for (int pass = 0; pass < 3; ++pass)
-        for (size_t gi = 0; gi < groups.size(); ++gi)
-          for (double v : options) {
-            std::vector<double> w = gw;
-            w[gi] = v;
-            if (std::all_of(w.begin(), w.end(), [](double x) { return x == 0; })) continue;
-            const double m = evaluate(G, n, w, pool, items).mrr;
-            if (m > best_g + 1e-9) {
-              best_g = m;
-              gw = w;
-            }
-          }
-      std::printf("fitted group weights:");
-      for (size_t gi = 0; gi < groups.size(); ++gi) std::printf(" %s %.3f", groups[gi].name, gw[gi]);
-      std::printf(" -> MRR %.3f\n", best_g);
-    }
+    const Pool tune_c = make_pool(composite, t, items, {kTune}, false), tune_g = make_pool(composite, t, items, {kTune}, true);
+    const Pool defaults = make_pool(composite, t, items, {3}, false);
 
     struct Row {
       std::string name;
-      std::vector<double> w;
+      Ranking r;
     };
     std::vector<Row> rows;
     for (size_t c = 0; c < k; ++c) {
       std::vector<double> w(k, 0.0);
       w[c] = 1.0;
-      rows.push_back({t.metrics[c]->id(), w});
+      rows.push_back({t.metrics[c]->id(), {false, w}});
     }
-    rows.push_back({"composite, equal weights", std::vector<double>(k, 1.0 / k)});
-    rows.push_back({"composite, fitted on tune (" + weights_str(best_w) + ")", best_w});
-    rows.push_back({"**default** (calibration.h: " + weights_str(current) + ")", current});
+    rows.push_back({"composite v1 (product of the four, equal weights; the old default)", {false, std::vector<double>(k, 1.0 / k)}});
+    const Ranking current{true, composite.group_weights()};
+
+    // The group-weight fit (tune split only; never the report split or the photos).
+    if (fit_passes > 0 && !tune_c.idx.empty()) {
+      std::vector<double> med(ng), w(ng);
+      std::printf("\n### Feature groups (tune split)\n\n| group | median same-texture distance | top-1 alone colour | top-1 alone grey |\n|---|---|---|---|\n");
+      for (size_t g = 0; g < ng; ++g) {
+        Ranking one{true, std::vector<double>(ng, 0.0)};
+        one.w[g] = 1.0;
+        med[g] = median_same(tune_c, one);
+        const Score a = evaluate(tune_c, one, items), b = evaluate(tune_g, one, items);
+        std::printf("| %s | %.4g | %.1f%% | %.1f%% |\n", composite.group_name(g).c_str(), med[g], 100 * a.top1, 100 * b.top1);
+        w[g] = med[g] > 0 ? 1.0 / med[g] : 0.0;
+      }
+      const bool constrained = !defaults.idx.empty();
+      auto objective = [&](const std::vector<double>& v) {
+        const Ranking r{true, v};
+        if (constrained) {
+          const double scale = std::sqrt(median_same(tune_c, r)) / -std::log(0.7);
+          if (max_similarity(defaults, r, scale, items) >= max_default_similarity) return -1.0;
+        }
+        return 0.5 * (evaluate(tune_c, r, items).mrr + evaluate(tune_g, r, items).mrr);
+      };
+      double best = objective(w);
+      std::printf("\nCoordinate descent from equal normalised weights (objective %.4f): multipliers "
+                  "0, 1/4, 1/2, 2, 4 per group, %d passes, objective mean MRR tune colour/grey, constraint "
+                  "max S between library defaults < %.2f%s\n",
+                  best, fit_passes, max_default_similarity, constrained ? "" : " (not applied: no shaders)");
+      const double mults[] = {0.0, 0.25, 0.5, 2.0, 4.0};
+      for (int pass = 0; pass < fit_passes; ++pass) {
+        for (size_t g = 0; g < ng; ++g)
+          for (double m : mults) {
+            std::vector<double> v = w;
+            v[g] = w[g] == 0 ? (m > 0 ? 0.25 * m / med[g] : 0.0) : w[g] * m;
+            if (std::all_of(v.begin(), v.end(), [](double x) { return x == 0; })) continue;
+            const double o = objective(v);
+            if (o > best + 1e-5) {
+              best = o;
+              w = v;
+            }
+          }
+        std::printf("pass %d: objective %.4f\n", pass + 1, best);
+        std::fflush(stdout);
+      }
+      const double scale = std::sqrt(median_same(tune_c, {true, w})) / -std::log(0.7);
+      std::printf("\nFitted (paste into metrics/calibration.h):\n\ninline constexpr Group kGroups[] = {\n");
+      for (size_t g = 0; g < ng; ++g)
+        std::printf("    {\"%s\", %.4g, %.6g},\n", composite.group_name(g).c_str(), med[g], w[g] * med[g]);
+      std::printf("};\ninline constexpr double kCompositeScale = %.4g;\n", scale);
+      rows.push_back({"composite, group weights fitted in this run", {true, w}});
+    }
+    rows.push_back({"**default** (grouped composite, metrics/calibration.h)", current});
 
     auto table = [&](const std::string& title, std::initializer_list<int> splits) {
-      const std::vector<int> pc = pool_of(items, splits, false), pg = pool_of(items, splits, true);
-      if (pc.empty()) return;
+      const Pool pc = make_pool(composite, t, items, splits, false), pg = make_pool(composite, t, items, splits, true);
+      if (pc.idx.empty()) return;
       std::set<std::string> classes;
-      for (int i : pc) classes.insert(items[i].texture);
-      std::printf("\n### %s: %zu images, %zu textures\n\n", title.c_str(), pc.size(), classes.size());
+      for (int i : pc.idx) classes.insert(items[i].texture);
+      std::printf("\n### %s: %zu images, %zu textures\n\n", title.c_str(), pc.n(), classes.size());
       std::printf("| metric | top-1 colour | MRR colour | top-1 grey | MRR grey |\n|---|---|---|---|---|\n");
       for (const Row& r : rows) {
-        const Score a = evaluate(D, n, r.w, pc, items), b = evaluate(D, n, r.w, pg, items);
-        std::printf("| %s | %.1f%% | %.3f | %.1f%% | %.3f |\n", r.name.c_str(), 100 * a.top1, a.mrr,
-                    100 * b.top1, b.mrr);
+        const Score a = evaluate(pc, r.r, items), b = evaluate(pg, r.r, items);
+        std::printf("| %s | %.1f%% | %.3f | %.1f%% | %.3f |\n", r.name.c_str(), 100 * a.top1, a.mrr, 100 * b.top1, b.mrr);
       }
       std::fflush(stdout);
     };
@@ -494,17 +610,58 @@ int main(int argc, char** argv) {
     table("**report split + photos** (the headline)", {kReport, kPhoto});
     table("shaders, tune split (even specs; the weights were fitted here)", {kTune});
 
+    const Pool rp_c = make_pool(composite, t, items, {kReport, kPhoto}, false);
+    const Pool rp_g = make_pool(composite, t, items, {kReport, kPhoto}, true);
+    // Similarity levels: what S means (search/match.h verdicts: >= 0.5 good, >= 0.25 approximate).
+    {
+      std::printf("\n### Similarity levels (report split + photos; p10 / median / p90)\n\n"
+                  "| metric | pool | same texture | same >= 0.5 | neighbour spec (sigma %.2f) | same shader, other spec | other shader / photo |\n|---|---|---|---|---|---|---|\n",
+                  perturb);
+      auto q = [](std::vector<double> v, double f) {
+        if (v.empty()) return 0.0;
+        std::sort(v.begin(), v.end());
+        return v[std::min(v.size() - 1, static_cast<size_t>(f * v.size()))];
+      };
+      for (const auto& [name, r, scale] : {std::tuple<std::string, Ranking, double>{"default", current, composite.scale()},
+                                           {"composite v1", rows[k].r, 1.0}})
+        for (const Pool* p : {&rp_c, &rp_g}) {
+          const std::vector<double> d = fused(*p, r);
+          std::vector<double> same, nb, other_spec, other;
+          const size_t n = p->n();
+          for (size_t a = 0; a < n; ++a)
+            for (size_t b = a + 1; b < n; ++b) {
+              const double sim = std::exp(-(r.groups ? std::sqrt(d[a * n + b]) : d[a * n + b]) / scale);
+              const Item& A = items[p->idx[a]];
+              const Item& B = items[p->idx[b]];
+              if (A.texture == B.texture) same.push_back(sim);
+              else if (A.source != B.source) other.push_back(sim);
+              else {
+                const int ia = std::atoi(A.texture.substr(A.texture.find('#') + 1).c_str());
+                const int ib = std::atoi(B.texture.substr(B.texture.find('#') + 1).c_str());
+                (ia / (neighbours + 1) == ib / (neighbours + 1) ? nb : other_spec).push_back(sim);
+              }
+            }
+          const double good = same.empty() ? 0 : 100.0 * std::count_if(same.begin(), same.end(), [](double x) { return x >= 0.5; }) / same.size();
+          std::printf("| %s | %s | %.2f / %.2f / %.2f | %.0f%% | %.2f / %.2f / %.2f | %.2f / %.2f / %.2f | %.2f / %.2f / %.2f |\n",
+                      name.c_str(), p == &rp_c ? "colour" : "grey", q(same, .1), q(same, .5), q(same, .9), good,
+                      q(nb, .1), q(nb, .5), q(nb, .9), q(other_spec, .1), q(other_spec, .5), q(other_spec, .9),
+                      q(other, .1), q(other, .5), q(other, .9));
+        }
+      if (!defaults.idx.empty()) {
+        std::string pair;
+        const double m = max_similarity(defaults, current, composite.scale(), items, &pair);
+        std::printf("\nLibrary defaults (%zu shaders): highest default-metric similarity between two of them %.3f (%s); "
+                    "the distinctness test requires < 0.6.\n", defaults.n(), m, pair.c_str());
+      }
+    }
+
     // Where the default metric fails: top-1 per source in the report split + photos (colour, grey).
     {
       std::map<std::string, std::pair<int, int>> pc, pg;
-      std::vector<std::map<std::string, std::pair<int, int>>> single(k), single_g(k);
-      evaluate(D, n, current, pool_of(items, {kReport, kPhoto}, false), items, &pc);
-      evaluate(D, n, current, pool_of(items, {kReport, kPhoto}, true), items, &pg);
-      for (size_t c = 0; c < k; ++c) {
-        std::vector<double> w(k, 0.0);
-        w[c] = 1.0;
-        evaluate(D, n, w, pool_of(items, {kReport, kPhoto}, false), items, &single[c]);
-      }
+      std::vector<std::map<std::string, std::pair<int, int>>> single(k);
+      evaluate(rp_c, current, items, &pc);
+      evaluate(rp_g, current, items, &pg);
+      for (size_t c = 0; c < k; ++c) evaluate(rp_c, rows[c].r, items, &single[c]);
       std::printf("\n### top-1 per source (report split + photos; colour unless marked)\n\n| source | queries |");
       for (size_t c = 0; c < k; ++c) std::printf(" %s |", t.metrics[c]->id().c_str());
       std::printf(" default | default grey |\n|---|---|");

@@ -17,7 +17,7 @@ class ColourMetric final : public Metric {
   static constexpr int kQuantiles = 9;
 
   std::string id() const override { return "colour"; }
-  int version() const override { return 1; }
+  int version() const override { return 2; }  // 2: vectorised sums (last bits)
   std::string summary() const override {
     return "CIELAB colour distribution: mean, covariance (Gaussian W2) and channel quantiles";
   }
@@ -25,6 +25,10 @@ class ColourMetric final : public Metric {
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
   double scale() const override;
+  // Feature groups for the default metric (composite.h): |difference of mean L*|, distance of mean (a*, b*), the covariance (Bures) part of the 2-Wasserstein distance, RMS difference of the L* quantiles, of the a* and b* quantiles.
+  std::size_t group_count() const override;
+  std::string group_name(std::size_t group) const override;
+  void group_distances(std::span<const float> a, std::span<const float> b, double* out) const override;
 };
 
 }  // namespace proctex::metrics

@@ -1,6 +1,8 @@
 #include "metrics/composite.h"
 
+#include <cmath>
 #include <cstdio>
+#include <memory>
 
 #include "core/error.h"
 #include "metrics/calibration.h"
@@ -12,7 +14,9 @@
 namespace proctex::metrics {
 
 namespace {
-constexpr int kOwnVersion = 1;
+// 1: product of component similarities; 2: weighted sum of group distances (grouped form).
+constexpr int kOwnVersionProduct = 1;
+constexpr int kOwnVersionGrouped = 2;
 }
 
 CompositeMetric::CompositeMetric(std::vector<Component> components, std::string id)
@@ -31,25 +35,77 @@ CompositeMetric::CompositeMetric(std::vector<Component> components, std::string 
     c.weight /= total;
     offsets_.push_back(size_);
     size_ += c.metric->feature_size();
+    group_offsets_.push_back(group_names_.size());
+    for (std::size_t g = 0; g < c.metric->group_count(); ++g) group_names_.push_back(c.metric->group_name(g));
   }
 }
 
+namespace {
+std::vector<CompositeMetric::Component> with_group_shares(std::vector<CompositeMetric::Component> components,
+                                                          const std::vector<double>& group_weights) {
+  // Each component's share of the group weights (reported; callers that leave a component out
+  // keep the others' relative weights). All zero is allowed: then equal shares.
+  std::size_t at = 0;
+  double total = 0;
+  for (auto& c : components) {
+    if (!c.metric) throw Error("composite metric component without a metric");
+    double share = 0;
+    for (std::size_t g = 0; g < c.metric->group_count(); ++g, ++at) {
+      if (at >= group_weights.size() || !(group_weights[at] >= 0))
+        throw Error("composite metric group weights: one weight >= 0 per feature group needed",
+                    "give as many weights as the components have groups");
+      share += group_weights[at];
+    }
+    c.weight = share;
+    total += share;
+  }
+  if (at != group_weights.size())
+    throw Error("composite metric group weights: one weight >= 0 per feature group needed",
+                "give as many weights as the components have groups");
+  if (!(total > 0)) throw Error("composite metric group weights are all zero", "give a group a positive weight");
+  return components;
+}
+}  // namespace
+
+CompositeMetric::CompositeMetric(std::vector<Component> components, std::vector<double> group_weights,
+                                 double scale, std::string id)
+    : CompositeMetric(with_group_shares(std::move(components), group_weights), std::move(id)) {
+  if (!(scale > 0)) throw Error("composite metric scale must be positive");
+  group_weights_ = std::move(group_weights);
+  scale_ = scale;
+}
+
 std::vector<CompositeMetric::Component> CompositeMetric::default_components() {
-  using namespace calibration;
-  return {{std::make_shared<SpectrumMetric>(), kWeightSpectrum},
-          {std::make_shared<PyramidMetric>(), kWeightPyramid},
-          {std::make_shared<ColourMetric>(), kWeightColour},
-          {std::make_shared<StructureMetric>(), kWeightStructure}};
+  return {{std::make_shared<SpectrumMetric>(), 1.0},
+          {std::make_shared<PyramidMetric>(), 1.0},
+          {std::make_shared<ColourMetric>(), 1.0},
+          {std::make_shared<StructureMetric>(), 1.0}};
+}
+
+std::shared_ptr<const CompositeMetric> CompositeMetric::make_default() {
+  std::vector<Component> components = default_components();
+  std::vector<std::string> names;
+  for (const auto& c : components)
+    for (std::size_t g = 0; g < c.metric->group_count(); ++g) names.push_back(c.metric->group_name(g));
+  std::vector<double> weights;
+  for (const std::string& name : names) {
+    double w = -1;
+    for (const calibration::Group& g : calibration::kGroups)
+      if (name == g.name) w = g.weight / g.median;
+    if (w < 0) throw Error("metrics/calibration.h has no weight for feature group " + name, "refit (bench_metrics_retrieval --fit-groups)");
+    weights.push_back(w);
+  }
+  return std::make_shared<CompositeMetric>(std::move(components), std::move(weights), calibration::kCompositeScale);
 }
 
 int CompositeMetric::version() const {
-  int v = 100 * kOwnVersion;
+  int v = 100 * (group_weights_.empty() ? kOwnVersionProduct : kOwnVersionGrouped);
   for (const Component& c : components_) v += c.metric->version();
   return v;
 }
 
 std::string CompositeMetric::summary() const {
-  std::string s = "weighted geometric mean of";
+  std::string s = group_weights_.empty() ? "weighted geometric mean of" : "weighted sum of feature-group distances; component shares";
   for (std::size_t i = 0; i < components_.size(); ++i) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%s %s %.2f", i ? "," : "", components_[i].metric->id().c_str(),
@@ -74,7 +130,27 @@ std::span<const float> CompositeMetric::slice(std::span<const float> composite,
   return composite.subspan(offsets_.at(component), components_.at(component).metric->feature_size());
 }
 
+void CompositeMetric::group_distances(std::span<const float> a, std::span<const float> b, double* out) const {
+  for (std::size_t i = 0; i < components_.size(); ++i)
+    components_[i].metric->group_distances(slice(a, i), slice(b, i), out + group_offsets_[i]);
+}
+
 double CompositeMetric::distance(std::span<const float> a, std::span<const float> b) const {
+  if (!group_weights_.empty()) {
+    // Few groups (20 by default): a stack buffer, no allocation per similarity.
+    double buf[64];
+    std::vector<double> heap;
+    double* g = buf;
+    if (group_names_.size() > 64) {
+      heap.resize(group_names_.size());
+      g = heap.data();
+    }
+    group_distances(a, b, g);
+    double d = 0;
+    for (std::size_t k = 0; k < group_names_.size(); ++k)
+      if (group_weights_[k] != 0) d += group_weights_[k] * g[k];
+    return std::sqrt(d);
+  }
   double d = 0;
   for (std::size_t i = 0; i < components_.size(); ++i) {
     const Metric& m = *components_[i].metric;

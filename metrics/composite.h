@@ -1,13 +1,24 @@
 #pragma once
-// The default metric: a weighted geometric combination of component metrics,
-//   S = prod_k S_k^{w_k},  sum_k w_k = 1   (equivalently distance = sum_k w_k d_k / scale_k),
-// so S stays in (0, 1], is 1 only when every component is 1, and one bad component pulls it
-// down (an arithmetic mean would let a perfect colour match hide a wrong structure).
+// The default metric: a combination of component metrics. Two forms:
+//  - grouped (the default metric): every component splits its distance into feature groups
+//    (Metric::group_distances: spectrum radial/orientation, pyramid levels, colour mean/
+//    covariance/quantiles, structure statistics); the distance is the square root of a weighted
+//    sum over all groups,
+//      d = sqrt(sum_g w_g d_g),   S = exp(-d / scale),
+//    with w_g = c_g / m_g (m_g: the group's median distance between two renders of one texture,
+//    c_g: the weight fitted by the retrieval evaluation) and scale set so that two renders of one
+//    texture score 0.7 at the median (metrics/calibration.h, docs/metrics.md). The square root
+//    (not fitted; ranking does not depend on it) puts unrelated textures at S ~0.1-0.25, where
+//    the verdict thresholds of search/match.h expect them; the plain sum would give them ~0;
+//  - product (legacy, for plug-in combinations): S = prod_k S_k^{w_k}, sum_k w_k = 1.
+// Either way S stays in (0, 1], is 1 only when every group (component) distance is 0, and one bad
+// part pulls it down (a perfect colour match cannot hide a wrong structure).
 // Features are the components' features concatenated in order; the analysis (crop, resize,
 // CIELAB) is done once for all of them. breakdown() reads every component's similarity from the
 // composite features, which is what a match result reports as evidence.
 // Version = 100 * own layout version + sum of the components' versions, so bumping any component
 // makes cached composite features stale too.
+#include <memory>
 #include <utility>
 
 #include "metrics/metric.h"
@@ -24,8 +35,16 @@ class CompositeMetric final : public Metric {
   // Weights are normalised to sum 1; throws proctex::Error for no component, a negative weight or
   // all weights zero. A zero-weight component is computed (breakdown) but not ranked by.
   explicit CompositeMetric(std::vector<Component> components, std::string id = "composite");
-  // spectrum, pyramid, colour, structure with the weights of metrics/calibration.h.
+  // Grouped form: one weight >= 0 per feature group of the components, in order (components'
+  // group_count() each), and the distance that maps to 1/e. Component weights are then only
+  // reported (components(): each component's share of the group weights, used by callers that
+  // leave a component out) and may be given as 0.
+  CompositeMetric(std::vector<Component> components, std::vector<double> group_weights, double scale,
+                  std::string id = "composite");
+  // spectrum, pyramid, colour, structure with the group weights of metrics/calibration.h.
   static std::vector<Component> default_components();
+  // The default metric (grouped form, metrics/calibration.h).
+  static std::shared_ptr<const CompositeMetric> make_default();
 
   std::string id() const override { return id_; }
   int version() const override;
@@ -33,7 +52,12 @@ class CompositeMetric final : public Metric {
   std::size_t feature_size() const override { return size_; }
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
-  double scale() const override { return 1.0; }
+  double scale() const override { return scale_; }
+  std::size_t group_count() const override { return group_names_.size(); }
+  std::string group_name(std::size_t group) const override { return group_names_.at(group); }
+  void group_distances(std::span<const float> a, std::span<const float> b, double* out) const override;
+  // Weight of each group (grouped form; empty for the product form).
+  const std::vector<double>& group_weights() const { return group_weights_; }
 
   const std::vector<Component>& components() const { return components_; }
   // (component id, similarity) for each component, from composite feature vectors.
@@ -47,6 +71,10 @@ class CompositeMetric final : public Metric {
   std::vector<std::size_t> offsets_;
   std::size_t size_ = 0;
   std::string id_;
+  std::vector<std::string> group_names_;
+  std::vector<std::size_t> group_offsets_;  // first group of each component
+  std::vector<double> group_weights_;
+  double scale_ = 1.0;
 };
 
 }  // namespace proctex::metrics

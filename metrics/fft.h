@@ -11,7 +11,8 @@ namespace proctex::metrics::detail {
 
 using Complex = std::complex<float>;  // layout-compatible with fftwf_complex
 
-// Heap array allocated with fftwf_malloc (SIMD alignment the cached plans assume).
+// Heap array allocated with fftwf_malloc (SIMD alignment the cached plans assume). The contents
+// start uninitialised: write before reading.
 template <typename T>
 class FftwArray {
  public:

@@ -61,7 +61,7 @@ struct Registry {
     auto colour = std::make_shared<ColourMetric>();
     auto structure = std::make_shared<StructureMetric>();
     metrics = {spectrum, pyramid, colour, structure,
-               std::make_shared<CompositeMetric>(CompositeMetric::default_components())};
+               CompositeMetric::make_default()};
   }
 };
 
@@ -135,6 +135,10 @@ Analysis prepare_analysis(const Image& image, int resolution) {
     an.lightness[i] = an.L[i] * 0.01f;
   }
   return an;
+}
+
+std::string Metric::group_name(std::size_t group) const {
+  return group == 0 && group_count() == 1 ? id() : id() + "." + std::to_string(group);
 }
 
 Features Metric::features(const Image& image, int resolution) const {

@@ -73,6 +73,15 @@ class Metric {
   // The distance that maps to similarity 1/e (calibrated per metric, see docs/metrics.md).
   virtual double scale() const = 0;
 
+  // Feature groups: the distance split into parts (>= 0, 0 for equal vectors) that the default
+  // metric weights separately (composite.h). By default one group: distance() / scale().
+  virtual std::size_t group_count() const { return 1; }
+  virtual std::string group_name(std::size_t group) const;
+  // Writes group_count() values to `out`.
+  virtual void group_distances(std::span<const float> a, std::span<const float> b, double* out) const {
+    out[0] = distance(a, b) / scale();
+  }
+
   Features features(const Image& image, int resolution = kDefaultResolution) const;
   Features features(const Analysis& analysis) const;
 

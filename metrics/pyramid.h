@@ -35,6 +35,10 @@ class PyramidMetric final : public Metric {
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
   double scale() const override;
+  // Feature groups for the default metric (composite.h): the EMD of each level.
+  std::size_t group_count() const override;
+  std::string group_name(std::size_t group) const override;
+  void group_distances(std::span<const float> a, std::span<const float> b, double* out) const override;
 };
 
 }  // namespace proctex::metrics

@@ -130,6 +130,22 @@ double SpectrumMetric::distance(std::span<const float> a, std::span<const float>
   return detail::weighted_rms(a, b, weights);
 }
 
+std::size_t SpectrumMetric::group_count() const { return 2; }
+
+std::string SpectrumMetric::group_name(std::size_t group) const {
+  return group == 0 ? "spectrum.radial" : "spectrum.orientation";
+}
+
+void SpectrumMetric::group_distances(std::span<const float> a, std::span<const float> b, double* out) const {
+  auto rms = [&](int from, int n) {
+    double s = 0;
+    for (int i = from; i < from + n; ++i) s += (static_cast<double>(a[i]) - b[i]) * (a[i] - b[i]);
+    return std::sqrt(s / n);
+  };
+  out[0] = rms(0, kRadialBins);
+  out[1] = rms(kRadialBins, kOrientationBins * kOrientationBands);
+}
+
 double SpectrumMetric::scale() const { return calibration::kSpectrumScale; }
 
 }  // namespace proctex::metrics

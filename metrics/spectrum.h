@@ -39,6 +39,10 @@ class SpectrumMetric final : public Metric {
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
   double scale() const override;
+  // Feature groups for the default metric (composite.h): RMS difference of the radial log powers, RMS difference of the orientation log ratios.
+  std::size_t group_count() const override;
+  std::string group_name(std::size_t group) const override;
+  void group_distances(std::span<const float> a, std::span<const float> b, double* out) const override;
 
   // The crop-averaged, windowed power spectrum of a square plane as (size/2) x (size/4 + 1)
   // half-plane values (exposed for tests: translation invariance).

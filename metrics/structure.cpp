@@ -255,6 +255,24 @@ double StructureMetric::distance(std::span<const float> a, std::span<const float
   return std::sqrt(total / wsum);
 }
 
+std::size_t StructureMetric::group_count() const { return std::size(kGroups); }
+
+std::string StructureMetric::group_name(std::size_t group) const {
+  return std::string("structure.") + kGroups[group].name;
+}
+
+void StructureMetric::group_distances(std::span<const float> a, std::span<const float> b, double* out) const {
+  std::size_t at = 0;
+  for (std::size_t g = 0; g < std::size(kGroups); ++g) {
+    double s = 0;
+    for (int i = 0; i < kGroups[g].size; ++i, ++at) {
+      const double d = (static_cast<double>(a[at]) - b[at]) / kGroups[g].unit;
+      s += d * d;
+    }
+    out[g] = std::sqrt(s / kGroups[g].size);
+  }
+}
+
 double StructureMetric::scale() const { return calibration::kStructureScale; }
 
 }  // namespace proctex::metrics

@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <thread>
 
 #include "core/error.h"
 #include "metrics/composite.h"
 #include "metrics/metric.h"
+#include "metrics/colour.h"
 #include "metrics/spectrum.h"
 
 using namespace proctex;
@@ -295,13 +297,47 @@ TEST(Metrics, CompositeBreakdownMatchesComponents) {
   Features fa = composite.features(a), fb = composite.features(b);
   const auto parts = composite.breakdown(fa.values, fb.values);
   ASSERT_EQ(parts.size(), composite.components().size());
-  double log_s = 0;
   for (size_t i = 0; i < parts.size(); ++i) {
     const Metric& m = get_metric(parts[i].first);
     EXPECT_NEAR(parts[i].second, m.similarity(m.features(a), m.features(b)), 1e-9) << parts[i].first;
-    log_s += composite.components()[i].weight * std::log(parts[i].second);
   }
-  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(log_s), 1e-9);
+}
+
+TEST(Metrics, DefaultIsAWeightedSumOfGroupDistances) {
+  const auto& composite = dynamic_cast<const CompositeMetric&>(default_metric());
+  ASSERT_EQ(composite.group_weights().size(), composite.group_count());
+  std::size_t groups = 0;
+  for (const auto& c : composite.components()) groups += c.metric->group_count();
+  EXPECT_EQ(groups, composite.group_count());
+  const Image a = crop_a("brick.png"), b = crop_b("grass.png");
+  Features fa = composite.features(a), fb = composite.features(b);
+  std::vector<double> g(composite.group_count());
+  composite.group_distances(fa.values, fb.values, g.data());
+  double d = 0;
+  for (size_t k = 0; k < g.size(); ++k) {
+    EXPECT_GE(g[k], 0.0) << composite.group_name(k);
+    d += composite.group_weights()[k] * g[k];
+  }
+  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(-std::sqrt(d) / composite.scale()), 1e-9);
+  // Every group of equal features is 0.
+  composite.group_distances(fa.values, fa.values, g.data());
+  for (size_t k = 0; k < g.size(); ++k) EXPECT_EQ(g[k], 0.0) << composite.group_name(k);
+}
+
+TEST(Metrics, ProductCompositeForPlugIns) {
+  // The product form: S = prod S_k^{w_k} with normalised weights.
+  CompositeMetric product({{std::make_shared<SpectrumMetric>(), 1.0}, {std::make_shared<ColourMetric>(), 3.0}},
+                          "test-product");
+  const Image a = crop_a("brick.png"), b = crop_b("grass.png");
+  const Features fa = product.features(a), fb = product.features(b);
+  const double s = std::pow(get_metric("spectrum").similarity(get_metric("spectrum").features(a),
+                                                              get_metric("spectrum").features(b)), 0.25) *
+                   std::pow(get_metric("colour").similarity(get_metric("colour").features(a),
+                                                            get_metric("colour").features(b)), 0.75);
+  EXPECT_NEAR(product.similarity(fa, fb), s, 1e-9);
+  EXPECT_TRUE(product.group_weights().empty());
+  EXPECT_THROW(CompositeMetric({{std::make_shared<SpectrumMetric>(), 1.0}}, {1.0}, 1.0), proctex::Error);  // 2 groups
+  EXPECT_THROW(CompositeMetric({{std::make_shared<SpectrumMetric>(), 1.0}}, {0.0, 0.0}, 1.0), proctex::Error);
 }
 
 TEST(Metrics, ThreadSafeFeatures) {
