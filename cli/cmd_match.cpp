@@ -34,6 +34,7 @@ struct MatchCliOptions {
   int candidates = 0;
   double threshold = 0.0;
   int screen = 4;
+  int race = 8;
   int starts = 3;
   long max_evaluations = 300;
   bool json = false;
@@ -93,6 +94,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   options.candidate_shaders = o.candidates;
   options.shader_threshold = o.threshold;
   options.screen = o.screen;
+  options.race = o.race;
   options.starts = o.starts;
   options.refine.optimizer = search::parse_optimizer(o.optimizer);
   options.refine.max_evaluations = o.max_evaluations;
@@ -157,7 +159,8 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--candidates", o->candidates, "Shaders kept after the pruned-graph ranking (0: all; the scan takes milliseconds)")->capture_default_str()->check(CLI::Range(0, 100000));
   cmd->add_option("--screen", o->screen, "Best catalogue samples per shader whose colours are fitted and scored")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--threshold", o->threshold, "Also keep every shader whose pruned best similarity reaches this")->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--starts", o->starts, "Starting points refined")->capture_default_str()->check(CLI::Range(1, 64));
+  cmd->add_option("--race", o->race, "Starting points given a short refinement")->capture_default_str()->check(CLI::Range(1, 256));
+  cmd->add_option("--starts", o->starts, "Best of those refined to the end")->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--optimizer", o->optimizer, "neldermead, subplex, bobyqa, global or gradient")->capture_default_str();
   cmd->add_option("--evaluations", o->max_evaluations, "Renders per starting point")->capture_default_str()->check(CLI::Range(1L, 1000000L));
   cmd->add_option("--budget", o->budget, "Stop after this time (20s, 2m) or this many renders (500), with the best so far");

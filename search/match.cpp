@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -261,8 +262,71 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const auto starts = choose_starts(screened, std::max(1, o.starts));
   result.timings["global"] = seconds_since(t_global);
 
-  // 3. Local refinement from each start, at the coarse resolution, after polishing its colours.
+  // 3. Local refinement at the coarse resolution, as a race: the top `race` starts (colours
+  // polished first) get a short refinement each, then the best `starts` of them continue with the
+  // rest of their evaluations. Screening at 64 px cannot tell bricks from pavers reliably; a short
+  // run at 128 px can, for a fraction of the renders of refining them all.
   const auto t_local = Clock::now();
+  struct Lane {
+    Start start;
+    const ShaderDecl* decl = nullptr;
+    ColourFitResult colours;
+    std::unique_ptr<ParameterSpace> space;
+    std::unique_ptr<Objective> objective;
+    RefineResult refined;
+  };
+  const int race = std::max(o.starts, o.race);
+  std::vector<Lane> lanes;
+  for (auto& st : choose_starts(screened, race)) {
+    Lane lane;
+    lane.decl = &library.get(st.shader);
+    std::vector<std::string> pinned;
+    apply_fixed(*lane.decl, st.sample->packed, o.fixed, pinned);
+    lane.colours = fit_colours(*lane.decl, {st.packed}, {st.sample->seed}, pinned, colour_target, renderer, true).front();
+    evaluations += colour_fit_renders(*lane.decl, pinned, 1);
+    lane.space = std::make_unique<ParameterSpace>(*lane.decl, lane.colours.packed, pinned);
+    lane.objective = std::make_unique<Objective>(*lane.space, target_coarse, metric, renderer, st.sample->seed,
+                                                 o.coarse_resolution);
+    lane.refined.unit = lane.space->to_unit(lane.colours.packed);
+    lane.start = std::move(st);
+    lanes.push_back(std::move(lane));
+  }
+  auto run_lane = [&](Lane& lane, long max_evaluations, const std::string& stage) {
+    Objective& objective = *lane.objective;
+    const long before = objective.evaluations();
+    Budget budget = o.budget;
+    if (budget.max_evaluations > 0) budget.max_evaluations = std::max<long>(0, budget.max_evaluations - evaluations) + before;
+    if (budget.max_seconds > 0) budget.max_seconds = std::max(0.0, budget.max_seconds - seconds_since(t_start));
+    objective.set_budget(budget);
+    objective.on_progress = [&](const Objective& obj) {
+      if (stop && *stop) objective.stop();
+      if (obj.best().similarity > state.best) {
+        state.best = obj.best().similarity;
+        state.best_shader = lane.start.shader;
+      }
+      state.evaluations = evaluations + obj.evaluations() - before;
+      report(stage);
+    };
+    if (objective.exhausted() || (stop && *stop)) {
+      if (lane.refined.similarity <= 0) lane.refined.similarity = objective.evaluate(lane.refined.unit);  // keeps it in the running
+    } else {
+      RefineOptions options = o.refine;
+      options.max_evaluations = max_evaluations;
+      const auto r = refine(objective, lane.refined.unit, options);
+      if (r.similarity >= lane.refined.similarity) lane.refined = r;
+    }
+    evaluations += objective.evaluations() - before;
+    result.stopped_early |= objective.exhausted() || (stop && *stop);
+  };
+  const long short_run = std::max<long>(30, o.refine.max_evaluations / 5);
+  for (size_t i = 0; i < lanes.size(); ++i)
+    run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
+  std::stable_sort(lanes.begin(), lanes.end(),
+                   [](const Lane& a, const Lane& b) { return a.refined.similarity > b.refined.similarity; });
+  const size_t finalists = std::min<size_t>(lanes.size(), std::max(1, o.starts));
+  for (size_t i = 0; i < finalists; ++i)
+    run_lane(lanes[i], std::max<long>(1, o.refine.max_evaluations - lanes[i].objective->evaluations()),
+             "refine " + std::to_string(i + 1) + "/" + std::to_string(finalists));
   struct Refined {
     const ShaderDecl* decl;
     std::vector<float> packed;
@@ -270,47 +334,17 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     double coarse;
   };
   std::vector<Refined> refined;
-  for (size_t i = 0; i < starts.size(); ++i) {
-    const auto& st = starts[i];
-    const ShaderDecl& decl = library.get(st.shader);
-    std::vector<std::string> pinned;
-    auto base = apply_fixed(decl, st.sample->packed, o.fixed, pinned);
-    const auto colours = fit_colours(decl, {st.packed}, {st.sample->seed}, pinned, colour_target, renderer, true).front();
-    evaluations += colour_fit_renders(decl, pinned, 1);
-    base = colours.packed;
-    const ParameterSpace space(decl, base, pinned);
-    Objective objective(space, target_coarse, metric, renderer, st.sample->seed, o.coarse_resolution);
-    Budget budget = o.budget;
-    if (budget.max_evaluations > 0) budget.max_evaluations = std::max<long>(0, budget.max_evaluations - evaluations);
-    if (budget.max_seconds > 0) budget.max_seconds = std::max(0.0, budget.max_seconds - seconds_since(t_start));
-    objective.set_budget(budget);
-    objective.on_progress = [&](const Objective& obj) {
-      if (stop && *stop) objective.stop();
-      if (obj.best().similarity > state.best) {
-        state.best = obj.best().similarity;
-        state.best_shader = st.shader;
-      }
-      state.evaluations = evaluations + obj.evaluations();
-      report("refine " + std::to_string(i + 1) + "/" + std::to_string(starts.size()));
-    };
-    const bool out_of_budget = objective.exhausted() || (stop && *stop);
-    RefineResult r;
-    if (out_of_budget) {
-      r.unit = space.to_unit(base);
-      r.similarity = objective.evaluate(r.unit);  // one render keeps the start in the running
-    } else {
-      r = refine(objective, space.to_unit(base), o.refine);
-    }
-    evaluations += objective.evaluations();
-    result.stopped_early |= objective.exhausted() || (stop && *stop);
-    refined.push_back({&decl, space.to_packed(r.unit), st.sample->seed, r.similarity});
-    result.starts.push_back({{"shader", st.shader},
-                             {"catalogue_similarity", st.catalogue_similarity},
-                             {"screened_similarity", st.similarity},
-                             {"colours_fitted", colours.fitted},
-                             {"colour_similarity", {{"catalogue", colours.before}, {"fitted", colours.after}}},
-                             {"refined_similarity_coarse", r.similarity},
-                             {"evaluations", objective.evaluations()}});
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    const auto& lane = lanes[i];
+    if (i < finalists) refined.push_back({lane.decl, lane.space->to_packed(lane.refined.unit), lane.start.sample->seed, lane.refined.similarity});
+    result.starts.push_back({{"shader", lane.start.shader},
+                             {"catalogue_similarity", lane.start.catalogue_similarity},
+                             {"screened_similarity", lane.start.similarity},
+                             {"colours_fitted", lane.colours.fitted},
+                             {"colour_similarity", {{"catalogue", lane.colours.before}, {"fitted", lane.colours.after}}},
+                             {"refined_similarity_coarse", lane.refined.similarity},
+                             {"finalist", i < finalists},
+                             {"evaluations", lane.objective->evaluations()}});
   }
   result.timings["local"] = seconds_since(t_local);
 
@@ -325,7 +359,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     const Image img = renderer.render_batch(*rf.decl, {rf.packed}, {rf.seed}, full).front();
     const metrics::Features f = metric.features(img, o.resolution);
     const double s = metric.similarity(target_full, f);
-    result.starts[i]["refined_similarity"] = s;
+    result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
     if (s > best) {
       best = s;
       result.spec = spec_from_packed(*rf.decl, rf.packed, rf.seed);

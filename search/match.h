@@ -38,7 +38,8 @@ struct MatchOptions {
   int candidate_shaders = 0;          // top-M shaders by their pruned graph (0: all)
   double shader_threshold = 0.0;      // also every shader whose pruned best reaches this
   int screen = 4;                     // best catalogue samples per candidate shader screened
-  int starts = 3;                     // top-k starting points refined
+  int race = 8;                       // starts given a short refinement (about 1/5 of the evaluations)
+  int starts = 3;                     // of those, the best k are refined to the end
   int resolution = 256;               // analysis resolution of the result (catalogue features)
   int coarse_resolution = 128;        // analysis resolution during refinement
   RefineOptions refine;
