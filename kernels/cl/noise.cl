@@ -45,7 +45,7 @@ float pt_grad_dot(int x, int y, uint seed, float2 offset) {
 
 // Gradient (Perlin) noise, range about [-1, 1], zero at lattice points, feature size 1.
 float pt_gnoise(float2 p, uint seed) {
-  const float2 cell = floor(p);
+  const float2 cell = pt_floor(p);
   const float2 f = p - cell;
   const int ix = (int)cell.x;
   const int iy = (int)cell.y;
@@ -61,7 +61,7 @@ float pt_gnoise(float2 p, uint seed) {
 // Two independent gradient noises sharing one lattice hash per corner (the gradients come from
 // different bits of it): a 2D vector field for domain warping at about the cost of one noise.
 float2 pt_gnoise2(float2 p, uint seed) {
-  const float2 cell = floor(p);
+  const float2 cell = pt_floor(p);
   const float2 f = p - cell;
   const int ix = (int)cell.x;
   const int iy = (int)cell.y;
@@ -78,7 +78,7 @@ float2 pt_gnoise2(float2 p, uint seed) {
 
 // Value noise: random values at lattice points, smoothly interpolated; range [-1, 1].
 float pt_vnoise(float2 p, uint seed) {
-  const float2 cell = floor(p);
+  const float2 cell = pt_floor(p);
   const float2 f = p - cell;
   const int ix = (int)cell.x;
   const int iy = (int)cell.y;
@@ -88,6 +88,16 @@ float pt_vnoise(float2 p, uint seed) {
   const float v01 = pt_u01(pt_hash2(ix, iy + 1, seed));
   const float v11 = pt_u01(pt_hash2(ix + 1, iy + 1, seed));
   return 2.0f * mix(mix(v00, v10, u.x), mix(v01, v11, u.x), u.y) - 1.0f;
+}
+
+// Feature point of lattice cell (cx, cy) for cellular noise and Voronoi cells. `mixed` is
+// pt_hash(seed), hashed once per lookup: one hash per point (two 16-bit coordinates) instead of
+// pt_rand2's chain of four keeps the 9 points of a lookup cheap (pt_cellular 11-14% faster in
+// caustics, crinkled, cracked_mud; A/B with bench_render --ab).
+float2 pt_voronoi_point(int cx, int cy, float jitter, uint mixed) {
+  const uint h = pt_hash(((uint)cx * 0x8da6b343U) ^ ((uint)cy * 0xd8163841U) ^ mixed);
+  const float2 u = (float2)((float)(h & 0xffffU), (float)(h >> 16)) * (1.0f / 65536.0f);
+  return (float2)((float)cx, (float)cy) + 0.5f + jitter * (u - 0.5f);
 }
 
 // Cellular (Worley) noise: one feature point per unit cell, displaced by `jitter` in [0, 1].
@@ -102,9 +112,10 @@ typedef struct {
 } PtCellular;
 
 PtCellular pt_cellular(float2 p, float jitter, uint seed) {
-  const float2 base = floor(p);
+  const float2 base = pt_floor(p);
   const int bx = (int)base.x;
   const int by = (int)base.y;
+  const uint mixed = pt_hash(seed);
   PtCellular r;
   float d1 = 1e9f, d2 = 1e9f;  // squared distances: one sqrt per result, not per point
   r.cell = (int2)(bx, by);
@@ -113,8 +124,7 @@ PtCellular pt_cellular(float2 p, float jitter, uint seed) {
     for (int dx = -1; dx <= 1; ++dx) {
       const int cx = bx + dx;
       const int cy = by + dy;
-      const float2 pt = (float2)((float)cx, (float)cy) + 0.5f +
-                        jitter * (pt_rand2(cx, cy, seed) - 0.5f);
+      const float2 pt = pt_voronoi_point(cx, cy, jitter, mixed);
       const float2 d = pt - p;
       const float dd = dot(d, d);
       if (dd < d1) {
@@ -139,8 +149,9 @@ PtCellular pt_cellular(float2 p, float jitter, uint seed) {
 // cells nearest p when radius <= 1 - jitter / 2, so that case checks 4 cells instead of 9.
 PtCellular pt_cellular_near(float2 p, float jitter, float radius, uint seed) {
   const int n = radius <= 1.0f - 0.5f * jitter ? 2 : 3;
-  const int x0 = n == 2 ? (int)floor(p.x - 0.5f) : (int)floor(p.x) - 1;
-  const int y0 = n == 2 ? (int)floor(p.y - 0.5f) : (int)floor(p.y) - 1;
+  const int x0 = n == 2 ? (int)pt_floor(p.x - 0.5f) : (int)pt_floor(p.x) - 1;
+  const int y0 = n == 2 ? (int)pt_floor(p.y - 0.5f) : (int)pt_floor(p.y) - 1;
+  const uint mixed = pt_hash(seed);
   PtCellular r;
   float d1 = 1e9f;
   r.cell = (int2)(x0, y0);
@@ -149,8 +160,7 @@ PtCellular pt_cellular_near(float2 p, float jitter, float radius, uint seed) {
     for (int dx = 0; dx < n; ++dx) {
       const int cx = x0 + dx;
       const int cy = y0 + dy;
-      const float2 pt = (float2)((float)cx, (float)cy) + 0.5f +
-                        jitter * (pt_rand2(cx, cy, seed) - 0.5f);
+      const float2 pt = pt_voronoi_point(cx, cy, jitter, mixed);
       const float2 d = pt - p;
       const float dd = dot(d, d);
       if (dd < d1) {

@@ -14,7 +14,7 @@ float pt_filtered_pulse(float a, float b, float x, float w) {
 
 // Integral of a unit-period pulse train that is 1 on [0, duty) of each period.
 float pt_pulsetrain_integral(float x, float duty) {
-  const float n = floor(x);
+  const float n = pt_floor(x);
   return n * duty + fmin(x - n, duty);
 }
 
@@ -39,9 +39,9 @@ float pt_coverage(float d, float w) { return clamp(0.5f - d / fmax(w, 1e-6f), 0.
 // rows are shifted by `shift` (fraction of a cell) per row. Returns the cell index in .xy (as
 // floats) and the position within the cell in .zw (x in [0, ratio), y in [0, 1)).
 float4 pt_brick_cell(float2 p, float ratio, float shift) {
-  const float row = floor(p.y);
+  const float row = pt_floor(p.y);
   const float x = p.x + row * shift * ratio;
-  const float col = floor(x / ratio);
+  const float col = pt_floor(x / ratio);
   return (float4)(col, row, x - col * ratio, p.y - row);
 }
 
@@ -81,7 +81,7 @@ float2 pt_rotate(float2 p, float angle) {
 // cell's length in *len (row height 1). bond: 0 running (half shift), 1 stack, 2 English (stretcher
 // rows alternate with header rows of half-length bricks), 3 Flemish (stretcher + header in every row).
 float4 pt_bond_cell(float2 p, float ratio, int bond, float* len) {
-  const float row = floor(p.y);
+  const float row = pt_floor(p.y);
   const int odd = ((int)row) & 1;
   if (bond == 1) {
     *len = ratio;
@@ -98,7 +98,7 @@ float4 pt_bond_cell(float2 p, float ratio, int bond, float* len) {
   if (bond == 3) {
     const float period = 1.5f * ratio;
     const float x = p.x + (odd ? 0.75f * ratio : 0.0f);
-    const float k = floor(x / period);
+    const float k = pt_floor(x / period);
     const float u = x - k * period;
     const int second = u >= ratio;
     *len = second ? 0.5f * ratio : ratio;

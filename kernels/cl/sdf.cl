@@ -41,7 +41,7 @@ float pt_sd_superellipse(float2 p, float2 radii, float n) {
 float pt_sd_star(float2 p, float r, int n, float inner) {
   const float sector = M_PI_F / (float)n;
   float a = pt_atan2(p.y, p.x);
-  a = a - 2.0f * sector * floor(a / (2.0f * sector));  // [0, 2 sector)
+  a = a - 2.0f * sector * pt_floor(a / (2.0f * sector));  // [0, 2 sector)
   if (a > sector) a = 2.0f * sector - a;                // mirror into [0, sector]
   const float len = length(p);
   const float2 q = len * (float2)(native_cos(a), native_sin(a));

@@ -11,14 +11,6 @@ typedef struct {
   float id;      // uniform random number of that cell
 } PtVoronoi;
 
-// Feature point of lattice cell (cx, cy). `mixed` is pt_hash(seed), hashed once per lookup: one
-// hash per point (two 16-bit coordinates) keeps the points of pt_voronoi cheap.
-float2 pt_voronoi_point(int cx, int cy, float jitter, uint mixed) {
-  const uint h = pt_hash(((uint)cx * 0x8da6b343U) ^ ((uint)cy * 0xd8163841U) ^ mixed);
-  const float2 u = (float2)((float)(h & 0xffffU), (float)(h >> 16)) * (1.0f / 65536.0f);
-  return (float2)((float)cx, (float)cy) + 0.5f + jitter * (u - 0.5f);
-}
-
 // One pass over the 3x3 cells around p keeps the three nearest points; the border distance is the
 // distance to the nearer of the bisectors between the nearest point and the second and third.
 // Near a border (where the value matters: gaps, cracks, rims) the cell across it is practically
@@ -26,7 +18,7 @@ float2 pt_voronoi_point(int cx, int cy, float jitter, uint mixed) {
 // after Inigo Quilez); further inside a cell it can come out slightly larger. Measured 19-25% faster for cells, stones
 // and cracked_mud (A/B, bench_render --ab), with 1-2% of pixels changing, by at most 0.09 (0-1).
 PtVoronoi pt_voronoi(float2 p, float jitter, uint seed) {
-  const float2 base = floor(p);
+  const float2 base = pt_floor(p);
   const int bx = (int)base.x, by = (int)base.y;
   const uint mixed = pt_hash(seed);
   float d1 = 1e9f, d2 = 1e9f, d3 = 1e9f;  // squared distances, nearest first
@@ -90,22 +82,22 @@ float4 pt_cell_feature(int cx, int cy, int k, uint seed) {
 float4 pt_hex_cell(float2 p) {
   // Two rectangular lattices of centres, offset by half a cell; the nearer centre wins.
   const float2 s = (float2)(1.0f, 1.7320508f);
-  const float2 a = floor(p / s + 0.5f) * s;
-  const float2 b = floor((p - 0.5f * s) / s + 0.5f) * s + 0.5f * s;
+  const float2 a = pt_floor(p / s + 0.5f) * s;
+  const float2 b = pt_floor((p - 0.5f * s) / s + 0.5f) * s + 0.5f * s;
   const float2 da = p - a, db = p - b;
   return dot(da, da) < dot(db, db) ? (float4)(a, da) : (float4)(b, db);
 }
 
 // Integer id of a hex tile from its centre (centres lie on a half-integer lattice).
-int2 pt_hex_id(float2 centre) { return (int2)((int)floor(centre.x * 2.0f + 0.5f), (int)floor(centre.y / 0.8660254f + 0.5f)); }
+int2 pt_hex_id(float2 centre) { return (int2)((int)pt_floor(centre.x * 2.0f + 0.5f), (int)pt_floor(centre.y / 0.8660254f + 0.5f)); }
 
 // Axis-aligned herringbone of 2 x 1 bricks (units: the brick width). Horizontal bricks have
 // lower-left corners (k - 2m, k + 2m), vertical ones (k - 2m + 2, k + 2m - 1): staircases along
 // the diagonal, repeated every (-2, 2). Returns the brick centre .xy and p relative to it .zw;
 // *vertical tells the orientation and *id is a unique integer pair of the brick.
 float4 pt_herringbone(float2 p, int* vertical, int2* id) {
-  const int k0 = (int)floor(0.5f * (p.x + p.y));
-  const int m0 = (int)floor(0.25f * (p.y - p.x));
+  const int k0 = (int)pt_floor(0.5f * (p.x + p.y));
+  const int m0 = (int)pt_floor(0.25f * (p.y - p.x));
   float4 best = (float4)(0.0f, 0.0f, 1e9f, 1e9f);
   float best_d = 1e9f;
   *vertical = 0;

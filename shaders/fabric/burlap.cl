@@ -13,7 +13,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float2 q = p * n;
   const float w = fw * n;
   q = pt_warp(q, w, 0.25f * P.wobble, 0.35f, 3, pt_subseed(seed, 1u));
-  const float2 cell = floor(q);
+  const float2 cell = pt_floor(q);
   const float2 f = q - cell - 0.5f;
   const int i = (int)cell.x, j = (int)cell.y;
   const int warp_on_top = ((i + j) & 1) == 0;

@@ -11,7 +11,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n = (float)P.stitches;
   const float2 q = (float2)(p.x * n, p.y * n / P.aspect);  // one stitch is 1 x 1 here
   const float w = fw * n / fmin(P.aspect, 1.0f);
-  const float2 cell = floor(q);
+  const float2 cell = pt_floor(q);
   // Each stitch is a V of two tilted, lens-shaped legs that meet at the bottom and spill a little
   // into the rows above and below; keep the leg whose outline is nearest (deepest inside).
   const float hl = 0.62f, hw = 0.5f * P.thickness * 0.62f;

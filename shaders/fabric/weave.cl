@@ -12,7 +12,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n = (float)P.threads;
   const float2 q = p * n;
   const float w = fw * n;
-  const float2 cell = floor(q);
+  const float2 cell = pt_floor(q);
   const float2 f = q - cell - 0.5f;  // [-0.5, 0.5)
   const int i = (int)cell.x, j = (int)cell.y;
   const int warp_on_top = ((i + j) & 1) == 0;

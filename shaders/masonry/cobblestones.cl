@@ -14,7 +14,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float2 q = p * rows;
   const float w = fw * rows;
   q = pt_warp(q, w, 0.12f * P.irregularity, 1.3f, 3, pt_subseed(seed, 1u));
-  const float row = floor(q.y);
+  const float row = pt_floor(q.y);
   const float shift = 0.5f + 0.45f * P.irregularity * (pt_rand(0, (int)row, 5, seed) - 0.5f);
   const float4 c = pt_brick_cell((float2)(q.x + row * (shift - 0.5f) * P.ratio, q.y), P.ratio, 0.5f);
   const int cx = (int)c.x, cy = (int)c.y;

@@ -16,11 +16,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   int2 id;
   if (P.layout == LAYOUT_BASKET) {
     // 2 x 2 blocks of two pavers, alternating horizontal and vertical like a checkerboard.
-    const float2 b = floor(q * 0.5f);
+    const float2 b = pt_floor(q * 0.5f);
     const float2 f = q - 2.0f * b;
     const int vert = (((int)b.x + (int)b.y) & 1);
     const float along = vert ? f.x : f.y;
-    const float k = floor(along);
+    const float k = pt_floor(along);
     lp = vert ? (float2)(f.x - k - 0.5f, f.y - 1.0f) : (float2)(f.x - 1.0f, f.y - k - 0.5f);
     half_size = vert ? (float2)(0.5f, 1.0f) : (float2)(1.0f, 0.5f);
     id = (int2)((int)b.x * 2 + (int)k, (int)b.y);

@@ -13,12 +13,12 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float2 q = p * n_c;
   const float w = fw * n_c;
   q = pt_warp(q, w, 0.08f * P.irregularity, 1.5f, 2, pt_subseed(seed, 1u));
-  const float row = floor(q.y);
+  const float row = pt_floor(q.y);
   const int iy = (int)row;
   // Stones of random length along each course: cut points at cells of mean length with jitter.
   const float L = P.length;
   const float x = q.x / L + pt_rand(0, iy, 5, seed) * 7.0f;
-  const float k = floor(x);
+  const float k = pt_floor(x);
   const float j0 = 0.5f * P.irregularity * (pt_rand((int)k, iy, 1, seed) - 0.5f);
   const float j1 = 0.5f * P.irregularity * (pt_rand((int)k + 1, iy, 1, seed) - 0.5f);
   float a = k + j0, b = k + 1.0f + j1;

@@ -18,7 +18,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
     const uint ls = pt_subseed(seed, (uint)layer);
     const float2 q = p * P.density + (float2)(0.37f, 0.71f) * (float)layer;
     const float w = fw * P.density;
-    const float2 base = floor(q);
+    const float2 base = pt_floor(q);
     const float light = 0.45f + 0.275f * (float)layer;
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {

@@ -11,22 +11,28 @@
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 q = p * P.density;
   const float w = fw * P.density;
-  const float2 base = floor(q);
+  const float2 base = pt_floor(q);
   float3 col = P.ground_color * (1.0f + 0.5f * pt_fbm(q * 2.0f, w * 2.0f, 3, 2.0f, 0.5f, seed));
   // Paint leaves bottom to top: a leaf's random depth decides the order, so find for each pixel
   // the covering leaf with the highest depth (leaves reach at most one cell beyond their own).
   float top = -1.0f;
   const float hl = 0.5f * P.size, hw = hl / P.elongation;
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx)
+  // Leaves within reach (hl + w) of q have their centres in the 3x3 cells around q; when the reach
+  // is at most half a cell, in the 2x2 cells nearest q. Visiting that sub-window in the same order
+  // gives the same pixels (leaves out of reach change nothing) at 8 instead of 18 leaf lookups.
+  const int n = hl + w <= 0.5f ? 2 : 3;
+  const int x0 = n == 2 ? (int)pt_floor(q.x - 0.5f) : (int)base.x - 1;
+  const int y0 = n == 2 ? (int)pt_floor(q.y - 0.5f) : (int)base.y - 1;
+  for (int dy = 0; dy < n; ++dy)
+    for (int dx = 0; dx < n; ++dx)
       for (int k = 0; k < 2; ++k) {
-        const int cx = (int)base.x + dx, cy = (int)base.y + dy;
+        const int cx = x0 + dx, cy = y0 + dy;
         const float4 f = pt_cell_feature(cx, cy, k, seed);
         const float depth = pt_fract(f.z * 7.13f + f.w * 3.1f);
         if (depth <= top) continue;
-        const float2 dir = normalize((float2)(f.z, pt_fract(f.w * 5.3f)) - 0.5f + 1e-4f);
         const float2 d = q - f.xy;
         if (dot(d, d) > (hl + w) * (hl + w)) continue;  // out of reach
+        const float2 dir = normalize((float2)(f.z, pt_fract(f.w * 5.3f)) - 0.5f + 1e-4f);
         const float2 l = (float2)(d.x * dir.y - d.y * dir.x, dot(d, dir));  // y along the leaf
         const float s = pt_sd_leaf(l, hl, hw);
         const float cover = pt_coverage(s, w);

@@ -16,7 +16,7 @@
 float3 star_layer(float2 p, float fw, uint seed, float n, float radius, float peak, float spread,
                   float glow, float cvar, float elong, float3 star_color) {
   const float2 q = p * n;
-  const float2 base = floor(q - 0.5f);
+  const float2 base = pt_floor(q - 0.5f);
   const float w = fw * n;                          // pixel footprint in cell units
   const float s0 = fmin(radius * n, 0.12f);        // core radius in cell units
   const float s2 = fmin(s0 * s0 + 0.08f * w * w, 0.0278f);  // widened, support 3 s <= 0.5

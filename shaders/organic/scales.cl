@@ -12,13 +12,13 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 q = p * P.scale;
   const float w = fw * P.scale;
   const float rowh = 1.0f - P.overlap;  // vertical spacing of rows
-  const float row0 = floor(q.y / rowh);
+  const float row0 = pt_floor(q.y / rowh);
   float3 col = P.edge_color;
   // Rows further down are on top; draw from the top row (behind) to the bottom row (front).
   for (int dr = -2; dr <= 1; ++dr) {
     const float row = row0 + (float)dr;
     const float shift = (((int)row) & 1) ? 0.5f : 0.0f;
-    const float k0 = floor(q.x - shift);
+    const float k0 = pt_floor(q.x - shift);
     for (int dk = 0; dk <= 1; ++dk) {
       const float k = k0 + (float)dk;
       // Scale centre; its visible part hangs below the centre.

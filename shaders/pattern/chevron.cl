@@ -9,7 +9,7 @@
 
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float z = p.x * (float)P.zigzags;
-  const float tri = fabs(2.0f * (z - floor(z)) - 1.0f);  // triangle wave in [0, 1]
+  const float tri = fabs(2.0f * (z - pt_floor(z)) - 1.0f);  // triangle wave in [0, 1]
   const float v = p.y * (float)P.stripes + P.amplitude * tri;
   // |grad v| = sqrt(stripes^2 + (2 amplitude zigzags)^2) away from the corners.
   const float sx = 2.0f * P.amplitude * (float)P.zigzags;

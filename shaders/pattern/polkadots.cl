@@ -12,17 +12,17 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n = (float)P.dots;
   const float2 q = p * n;
   const float w = fw * n;
-  const float row = floor(q.y);
+  const float row = pt_floor(q.y);
   float d = 1e9f;
   for (int dy = -1; dy <= 1; ++dy) {
     const float r_ = row + (float)dy;
     const float shift = (P.layout == LAYOUT_STAGGERED && (((int)r_) & 1)) ? 0.5f : 0.0f;
-    const float col = floor(q.x - shift);
+    const float col = pt_floor(q.x - shift);
     for (int dx = -1; dx <= 1; ++dx) {
       const float c_ = col + (float)dx;
       const float4 f = pt_cell_feature((int)c_, (int)r_, 0, seed);
       float2 centre = (float2)(c_ + shift + 0.5f, r_ + 0.5f);
-      centre += 0.3f * P.jitter * (f.xy - floor(f.xy) - 0.5f) * 2.0f * (0.5f - 0.5f * P.radius);
+      centre += 0.3f * P.jitter * (f.xy - pt_floor(f.xy) - 0.5f) * 2.0f * (0.5f - 0.5f * P.radius);
       const float r = P.radius * (1.0f - 0.6f * P.size_variation * f.z);
       d = fmin(d, length(q - centre) - r);
     }

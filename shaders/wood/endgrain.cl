@@ -18,7 +18,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float ang = pt_atan2(a.y, a.x) * (1.0f / (2.0f * M_PI_F)) + 0.5f;  // [0, 1)
   const float bins = 9.0f;
   const float t = ang * bins;
-  const float k = floor(t);
+  const float k = pt_floor(t);
   const float present = pt_rand((int)k, 0, 1, seed) < P.cracks ? 1.0f : 0.0f;
   const float centre = k + 0.3f + 0.4f * pt_rand((int)k, 0, 2, seed);
   const float len = 0.15f + 0.5f * pt_rand((int)k, 0, 3, seed);

@@ -12,12 +12,12 @@
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float nb = (float)P.blocks, ns = (float)P.strips;
   const float2 q = p * nb;
-  const float2 b = floor(q);
+  const float2 b = pt_floor(q);
   const float2 f = q - b;
   const int vert = (((int)b.x + (int)b.y) & 1);
   // Position in strip units: along the strip (x) and across (y).
   const float2 s = (vert ? (float2)(f.y, f.x) : f) * ns;
-  const float k = floor(s.y);
+  const float k = pt_floor(s.y);
   const float2 lp = (float2)(s.x - 0.5f * ns, s.y - k - 0.5f);
   const float w = fw * nb * ns;
   const float d = pt_sd_box(lp, (float2)(0.5f * ns, 0.5f) - 0.5f * P.gap);
@@ -27,6 +27,6 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 a = (float2)((lp.x + 5.0f * r.x) / 4.0f, lp.y - 0.8f - 2.0f * r.z) / (nb * ns);
   float3 col = pt_wood(a, fw, P.rings * nb * ns, 0.4f, 0.35f, 0.5f, P.grain, P.light_color, P.dark_color,
                        pt_hash3(ix, iy, 13, seed));
-  col = pt_vary_color(col, P.variation, r.w, r.y - floor(r.y));
+  col = pt_vary_color(col, P.variation, r.w, r.y - pt_floor(r.y));
   return pt_saturate3(mix(P.gap_color, col, cover));
 }

@@ -14,7 +14,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n = (float)P.planks;
   const float2 q = p * n;  // one board is 1 unit wide
   const float w = fw * n;
-  const float row = floor(q.y);
+  const float row = pt_floor(q.y);
   const float shift = pt_rand(0, (int)row, 3, seed) * P.length;
   const float4 c = pt_brick_cell((float2)(q.x + shift, q.y), P.length, 0.0f);
   const int cx = (int)c.x, cy = (int)c.y;
@@ -26,6 +26,6 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 a = (float2)((lp.x + 7.0f * r.x) / (3.0f * P.length), lp.y - 0.6f - 1.5f * r.z) / n;
   float3 col = pt_wood(a, fw * 1.0f, P.rings * n, P.distortion, 0.35f, 0.5f, P.grain, P.light_color,
                        P.dark_color, pt_hash3(cx, cy, 11, seed));
-  col = pt_vary_color(col, P.variation, r.w, r.y - floor(r.y));
+  col = pt_vary_color(col, P.variation, r.w, r.y - pt_floor(r.y));
   return pt_saturate3(mix(P.gap_color, col, cover));
 }
