@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "core/hash.h"
 
 namespace proctex::ocl {
 namespace {
@@ -136,17 +137,6 @@ std::filesystem::path binary_cache_dir() {
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::filesystem::path(xdg) / "proctex/kernels";
   if (const char* home = std::getenv("HOME"); home && *home) return std::filesystem::path(home) / ".cache/proctex/kernels";
   return {};
-}
-
-std::string fnv1a_hex(const std::string& text) {
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
 }
 
 std::vector<unsigned char> read_binary(const std::filesystem::path& path) {

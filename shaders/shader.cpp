@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/hash.h"
 
 namespace proctex {
 namespace {
@@ -176,16 +177,7 @@ std::vector<float> ShaderDecl::default_packed() const {
   return packed;
 }
 
-std::string stable_hash(const std::string& text) {
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
+std::string stable_hash(const std::string& text) { return fnv1a_hex(text); }
 
 ShaderDecl parse_shader(const std::string& path, const std::string& source) {
   ShaderDecl decl;
