@@ -294,10 +294,22 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   auto run_lane = [&](Lane& lane, long max_evaluations, const std::string& stage) {
     Objective& objective = *lane.objective;
     const long before = objective.evaluations();
-    Budget budget = o.budget;
-    if (budget.max_evaluations > 0) budget.max_evaluations = std::max<long>(0, budget.max_evaluations - evaluations) + before;
-    if (budget.max_seconds > 0) budget.max_seconds = std::max(0.0, budget.max_seconds - seconds_since(t_start));
+    // What is left of the whole match's budget (0 would mean "unlimited" to the objective, so a
+    // spent budget stops it instead).
+    Budget budget;
+    bool spent = false;
+    if (o.budget.max_evaluations > 0) {
+      const long left = o.budget.max_evaluations - evaluations;
+      spent |= left <= 0;
+      budget.max_evaluations = before + std::max<long>(left, 1);
+    }
+    if (o.budget.max_seconds > 0) {
+      const double left = o.budget.max_seconds - seconds_since(t_start);
+      spent |= left <= 0;
+      budget.max_seconds = std::max(left, 1e-6);
+    }
     objective.set_budget(budget);
+    if (spent) objective.stop();
     objective.on_progress = [&](const Objective& obj) {
       if (stop && *stop) objective.stop();
       if (obj.best().similarity > state.best) {

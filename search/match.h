@@ -43,7 +43,8 @@ struct MatchOptions {
   int resolution = 256;               // analysis resolution of the result (catalogue features)
   int coarse_resolution = 128;        // analysis resolution during refinement
   RefineOptions refine;
-  Budget budget;                      // whole match
+  Budget budget;                      // whole match: the refinement stops when it is spent (the
+                                      // screening always completes; it is what gives a result)
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
 };
 
