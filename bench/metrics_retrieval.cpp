@@ -528,6 +528,11 @@ int main(int argc, char** argv) {
     const Pool tune_c = make_pool(composite, t, items, {kTune}, false), tune_g = make_pool(composite, t, items, {kTune}, true);
     const Pool defaults = make_pool(composite, t, items, {3}, false);
 
+    const auto& grouped = dynamic_cast<const metrics::CompositeMetric&>(metrics::get_metric("grouped"));
+    std::vector<double> default_w;
+    for (const auto& c : composite.components()) default_w.push_back(c.weight);
+    const Ranking current{false, default_w};                       // the default (product form)
+    const Ranking grouped_r{true, grouped.group_weights()};        // "grouped"
     struct Row {
       std::string name;
       Ranking r;
@@ -538,8 +543,7 @@ int main(int argc, char** argv) {
       w[c] = 1.0;
       rows.push_back({t.metrics[c]->id(), {false, w}});
     }
-    rows.push_back({"composite v1 (product of the four, equal weights; the old default)", {false, std::vector<double>(k, 1.0 / k)}});
-    const Ranking current{true, composite.group_weights()};
+    rows.push_back({"**default** composite (product of the four, equal weights)", current});
 
     // The group-weight fit (tune split only; never the report split or the photos).
     if (fit_passes > 0 && !tune_c.idx.empty()) {
@@ -590,7 +594,7 @@ int main(int argc, char** argv) {
       std::printf("};\ninline constexpr double kCompositeScale = %.4g;\n", scale);
       rows.push_back({"composite, group weights fitted in this run", {true, w}});
     }
-    rows.push_back({"**default** (grouped composite, metrics/calibration.h)", current});
+    rows.push_back({"**grouped** (fitted group weights, metrics/calibration.h)", grouped_r});
 
     auto table = [&](const std::string& title, std::initializer_list<int> splits) {
       const Pool pc = make_pool(composite, t, items, splits, false), pg = make_pool(composite, t, items, splits, true);
@@ -622,8 +626,8 @@ int main(int argc, char** argv) {
         std::sort(v.begin(), v.end());
         return v[std::min(v.size() - 1, static_cast<size_t>(f * v.size()))];
       };
-      for (const auto& [name, r, scale] : {std::tuple<std::string, Ranking, double>{"default", current, composite.scale()},
-                                           {"composite v1", rows[k].r, 1.0}})
+      for (const auto& [name, r, scale] : {std::tuple<std::string, Ranking, double>{"grouped", grouped_r, grouped.scale()},
+                                           {"default (composite)", current, 1.0}})
         for (const Pool* p : {&rp_c, &rp_g}) {
           const std::vector<double> d = fused(*p, r);
           std::vector<double> same, nb, other_spec, other;
@@ -649,8 +653,8 @@ int main(int argc, char** argv) {
         }
       if (!defaults.idx.empty()) {
         std::string pair;
-        const double m = max_similarity(defaults, current, composite.scale(), items, &pair);
-        std::printf("\nLibrary defaults (%zu shaders): highest default-metric similarity between two of them %.3f (%s); "
+        const double m = max_similarity(defaults, grouped_r, grouped.scale(), items, &pair);
+        std::printf("\nLibrary defaults (%zu shaders): highest grouped-metric similarity between two of them %.3f (%s); "
                     "the distinctness test requires < 0.6.\n", defaults.n(), m, pair.c_str());
       }
     }
@@ -659,12 +663,12 @@ int main(int argc, char** argv) {
     {
       std::map<std::string, std::pair<int, int>> pc, pg;
       std::vector<std::map<std::string, std::pair<int, int>>> single(k);
-      evaluate(rp_c, current, items, &pc);
-      evaluate(rp_g, current, items, &pg);
+      evaluate(rp_c, grouped_r, items, &pc);
+      evaluate(rp_g, grouped_r, items, &pg);
       for (size_t c = 0; c < k; ++c) evaluate(rp_c, rows[c].r, items, &single[c]);
       std::printf("\n### top-1 per source (report split + photos; colour unless marked)\n\n| source | queries |");
       for (size_t c = 0; c < k; ++c) std::printf(" %s |", t.metrics[c]->id().c_str());
-      std::printf(" default | default grey |\n|---|---|");
+      std::printf(" grouped | grouped grey |\n|---|---|");
       for (size_t c = 0; c < k + 2; ++c) std::printf("---|");
       std::printf("\n");
       for (const auto& [src, hq] : pc) {

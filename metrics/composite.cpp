@@ -43,26 +43,31 @@ CompositeMetric::CompositeMetric(std::vector<Component> components, std::string 
 namespace {
 std::vector<CompositeMetric::Component> with_group_shares(std::vector<CompositeMetric::Component> components,
                                                           const std::vector<double>& group_weights) {
-  // Each component's share of the group weights (reported; callers that leave a component out
-  // keep the others' relative weights). All zero is allowed: then equal shares.
+  // Checks one weight >= 0 per group. Component weights are kept when given (reported; callers
+  // that leave a component out keep the others' relative weights); all zero: each component's
+  // share of the group weights.
   std::size_t at = 0;
-  double total = 0;
-  for (auto& c : components) {
+  double total = 0, given = 0;
+  std::vector<double> share;
+  for (const auto& c : components) {
     if (!c.metric) throw Error("composite metric component without a metric");
-    double share = 0;
+    double sh = 0;
     for (std::size_t g = 0; g < c.metric->group_count(); ++g, ++at) {
       if (at >= group_weights.size() || !(group_weights[at] >= 0))
         throw Error("composite metric group weights: one weight >= 0 per feature group needed",
                     "give as many weights as the components have groups");
-      share += group_weights[at];
+      sh += group_weights[at];
     }
-    c.weight = share;
-    total += share;
+    share.push_back(sh);
+    total += sh;
+    given += c.weight > 0 ? c.weight : 0.0;
   }
   if (at != group_weights.size())
     throw Error("composite metric group weights: one weight >= 0 per feature group needed",
                 "give as many weights as the components have groups");
   if (!(total > 0)) throw Error("composite metric group weights are all zero", "give a group a positive weight");
+  if (!(given > 0))
+    for (std::size_t i = 0; i < components.size(); ++i) components[i].weight = share[i];
   return components;
 }
 }  // namespace
@@ -83,7 +88,25 @@ std::vector<CompositeMetric::Component> CompositeMetric::default_components() {
 }
 
 std::shared_ptr<const CompositeMetric> CompositeMetric::make_default() {
+  using namespace calibration;
+  return std::make_shared<CompositeMetric>(
+      std::vector<Component>{{std::make_shared<SpectrumMetric>(), kWeightSpectrum},
+                             {std::make_shared<PyramidMetric>(), kWeightPyramid},
+                             {std::make_shared<ColourMetric>(), kWeightColour},
+                             {std::make_shared<StructureMetric>(), kWeightStructure}});
+}
+
+std::shared_ptr<const CompositeMetric> CompositeMetric::make_grouped() {
   std::vector<Component> components = default_components();
+  // Component weights (reported, and used by callers that leave colour out to rank by structure):
+  // each component's sum of fitted c_g, i.e. its share of the distance of a typical same-texture
+  // pair (every group contributes about c_g there, d_g being near its median m_g).
+  for (auto& c : components) {
+    c.weight = 0;
+    for (std::size_t g = 0; g < c.metric->group_count(); ++g)
+      for (const calibration::Group& cg : calibration::kGroups)
+        if (c.metric->group_name(g) == cg.name) c.weight += cg.weight;
+  }
   std::vector<std::string> names;
   for (const auto& c : components)
     for (std::size_t g = 0; g < c.metric->group_count(); ++g) names.push_back(c.metric->group_name(g));
@@ -95,7 +118,8 @@ std::shared_ptr<const CompositeMetric> CompositeMetric::make_default() {
     if (w < 0) throw Error("metrics/calibration.h has no weight for feature group " + name, "refit (bench_metrics_retrieval --fit-groups)");
     weights.push_back(w);
   }
-  return std::make_shared<CompositeMetric>(std::move(components), std::move(weights), calibration::kCompositeScale);
+  return std::make_shared<CompositeMetric>(std::move(components), std::move(weights), calibration::kCompositeScale,
+                                           "grouped");
 }
 
 int CompositeMetric::version() const {
@@ -149,7 +173,7 @@ double CompositeMetric::distance(std::span<const float> a, std::span<const float
     double d = 0;
     for (std::size_t k = 0; k < group_names_.size(); ++k)
       if (group_weights_[k] != 0) d += group_weights_[k] * g[k];
-    return std::sqrt(d);
+    return std::pow(d, calibration::kCompositeExponent);
   }
   double d = 0;
   for (std::size_t i = 0; i < components_.size(); ++i) {

@@ -60,7 +60,7 @@ struct Registry {
     auto pyramid = std::make_shared<PyramidMetric>();
     auto colour = std::make_shared<ColourMetric>();
     auto structure = std::make_shared<StructureMetric>();
-    metrics = {spectrum, pyramid, colour, structure,
+    metrics = {spectrum, pyramid, colour, structure, CompositeMetric::make_grouped(),
                CompositeMetric::make_default()};
   }
 };

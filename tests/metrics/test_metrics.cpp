@@ -297,14 +297,17 @@ TEST(Metrics, CompositeBreakdownMatchesComponents) {
   Features fa = composite.features(a), fb = composite.features(b);
   const auto parts = composite.breakdown(fa.values, fb.values);
   ASSERT_EQ(parts.size(), composite.components().size());
+  double log_s = 0;
   for (size_t i = 0; i < parts.size(); ++i) {
     const Metric& m = get_metric(parts[i].first);
     EXPECT_NEAR(parts[i].second, m.similarity(m.features(a), m.features(b)), 1e-9) << parts[i].first;
+    log_s += composite.components()[i].weight * std::log(parts[i].second);
   }
+  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(log_s), 1e-9);  // the default: product form
 }
 
-TEST(Metrics, DefaultIsAWeightedSumOfGroupDistances) {
-  const auto& composite = dynamic_cast<const CompositeMetric&>(default_metric());
+TEST(Metrics, GroupedIsAWeightedSumOfGroupDistances) {
+  const auto& composite = dynamic_cast<const CompositeMetric&>(get_metric("grouped"));
   ASSERT_EQ(composite.group_weights().size(), composite.group_count());
   std::size_t groups = 0;
   for (const auto& c : composite.components()) groups += c.metric->group_count();
