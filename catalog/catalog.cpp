@@ -170,7 +170,8 @@ BuildReport build(const BuildOptions& o, const std::function<void(const BuildEve
 }
 
 nlohmann::json MergeReport::to_json() const {
-  return {{"out", out.string()}, {"inputs", inputs}, {"added", added}, {"unchanged", unchanged}};
+  return {{"out", out.string()},   {"inputs", inputs},          {"added", added},          {"unchanged", unchanged},
+          {"linked", linked},       {"linked_before", linked_before}, {"jump_edges", jump_edges}};
 }
 
 MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs) {
@@ -230,7 +231,27 @@ MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs) {
       dst.write(cat, src.summary.device, src.summary.build_seconds);
       report.added.push_back(name);
     }
-    dst.finish_build(id, {{"added", report.added}, {"unchanged", report.unchanged}});
+    // Jump edges: a file's edges join two of its own shaders (foreign keys), every shader of every
+    // input is now in OUT, and the conflict check proved all copies of a shader identical, so each
+    // input's edges are valid in OUT as they are. Writing them never touches a pair OUT links.
+    std::set<std::pair<std::string, std::string>> linked;
+    for (const auto& e : dst.jumps()) linked.insert({e.shader_a, e.shader_b});
+    for (const auto& p : linked) report.linked_before.push_back(p.first + "-" + p.second);
+    for (const auto& in : inputs) {
+      if (fs::equivalent(in, out, ec)) continue;
+      auto& s = open[in];
+      if (!s) s = std::make_unique<Store>(in, Store::Access::Read);
+      std::map<std::pair<std::string, std::string>, std::vector<JumpEdge>> pairs;
+      for (auto& e : s->jumps()) pairs[{e.shader_a, e.shader_b}].push_back(std::move(e));
+      for (const auto& [pair, edges] : pairs) {
+        if (!linked.insert(pair).second || !dst.summary(pair.first) || !dst.summary(pair.second)) continue;
+        dst.write_jumps(pair.first, pair.second, edges);
+        report.linked.push_back(pair.first + "-" + pair.second);
+        report.jump_edges += static_cast<int>(edges.size());
+      }
+    }
+    dst.finish_build(id, {{"added", report.added}, {"unchanged", report.unchanged}, {"linked", report.linked},
+                          {"jump_edges", report.jump_edges}});
   } catch (...) {
     if (!existed) {
       fs::remove(out, ec);

@@ -85,12 +85,19 @@ BuildReport build(const BuildOptions& options, const std::function<void(const Bu
 struct MergeReport {
   std::filesystem::path out;
   std::vector<std::string> added, unchanged;
+  // Jump edges (schema v2), per shader pair "a-b": pairs copied from an input, pairs OUT already
+  // linked (kept as they are), and how many edges were copied.
+  std::vector<std::string> linked, linked_before;
+  int jump_edges = 0;
   int inputs = 0;
   nlohmann::json to_json() const;
 };
 // Copies every shader of `inputs` into `out` (created if missing). The same shader in two places
 // with different content (source, settings, seed or samples) is a conflict: proctex::Error listing
 // them, and `out` is left unchanged. Identical duplicates are fine (idempotent merges).
+// Jump edges come along: every pair an input links is linked in `out` too (both its shaders are in
+// `out` afterwards, with the content the edges were found from). A pair `out` already links keeps
+// its edges; otherwise the first input (in order) that links the pair gives them.
 MergeReport merge(const std::filesystem::path& out, const std::vector<std::filesystem::path>& inputs);
 
 // Per shader: samples, pruned size, coverage, build time, staleness against the current library.

@@ -117,15 +117,16 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
   auto merge_json = std::make_shared<bool>(false);
   CLI::App* merge = cat->add_subcommand(
       "merge", "Merge catalogue files (CI shards) into OUT (created if missing). The same shader with different\n"
-               "content in two inputs is a conflict: an error, and OUT is left unchanged.");
+               "content in two inputs is a conflict: an error, and OUT is left unchanged. Jump edges (catalog link)\n"
+               "come along; a shader pair OUT already links keeps its edges.");
   merge->add_option("files", *merge_args, "OUT IN...")->required()->expected(2, -1);
   merge->add_flag("--json", *merge_json, "machine-readable report on stdout");
   merge->callback([merge_args, merge_json] {
     std::vector<fs::path> inputs(merge_args->begin() + 1, merge_args->end());
     const auto r = catalog::merge(merge_args->front(), inputs);
     if (*merge_json) return print_json(r.to_json());
-    std::printf("%s: %zu shaders added, %zu already present, from %d inputs\n", r.out.string().c_str(),
-                r.added.size(), r.unchanged.size(), r.inputs);
+    std::printf("%s: %zu shaders added, %zu already present, %zu shader pairs' jump edges copied (%d edges), from %d inputs\n",
+                r.out.string().c_str(), r.added.size(), r.unchanged.size(), r.linked.size(), r.jump_edges, r.inputs);
   });
 
   // info

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <set>
 
+#include <fmt/format.h>
+
 #include "catalog/catalog.h"
 #include "catalog/sqlite.h"
 #include "core/error.h"
@@ -356,6 +358,89 @@ TEST_F(Transform, JumpEdgesRoundTripAndGoWithARebuiltShader) {
   // Rewriting a shader (a rebuild) drops the jump edges found from its old samples.
   store.write(store.load("rectangle"), "test", 0.0);
   EXPECT_TRUE(store.jumps().empty());
+}
+
+// A hand-made jump edge between sample `i` of `a` and sample `j` of `b` (storage tests need no link).
+catalog::JumpEdge hand_edge(catalog::Store& store, const std::string& a, const std::string& b, int i, int j, double s) {
+  const auto ca = store.load(a, false), cb = store.load(b, false);
+  catalog::JumpEdge e;
+  e.shader_a = a;
+  e.shader_b = b;
+  e.packed_a = ca.samples.at(i).packed;
+  e.packed_b = cb.samples.at(j).packed;
+  e.features_a = ca.samples.at(i).features;
+  e.features_b = cb.samples.at(j).features;
+  e.similarity = s;
+  return e;
+}
+
+std::vector<std::string> edge_keys(catalog::Store& store) {
+  std::vector<std::string> out;
+  for (const auto& e : store.jumps())
+    out.push_back(fmt::format("{}-{} {} {}", e.shader_a, e.shader_b, e.similarity, e.packed_a.front()));
+  return out;
+}
+
+TEST_F(Transform, MergeCopiesJumpEdgesAndNeverReplacesOutsOwn) {
+  // Two shards, each linking a pair of its own shaders; a third file of schema v1 (no jumps table).
+  const fs::path s1 = copy_db("shard1.sqlite"), s2 = copy_db("shard2.sqlite"), v1 = copy_db("shard-v1.sqlite");
+  std::vector<std::string> want;
+  {
+    catalog::Store a(s1, catalog::Store::Access::Write);
+    a.remove("bricks");
+    a.remove("polkadots");
+    a.write_jumps("rectangle", "superellipse", {hand_edge(a, "rectangle", "superellipse", 0, 1, 0.4),
+                                                 hand_edge(a, "rectangle", "superellipse", 2, 3, 0.3)});
+    a.write_jumps("circle", "superellipse", {hand_edge(a, "circle", "superellipse", 1, 1, 0.5)});
+    catalog::Store b(s2, catalog::Store::Access::Write);
+    b.remove("rectangle");
+    b.write_jumps("bricks", "polkadots", {hand_edge(b, "bricks", "polkadots", 4, 5, 0.2)});
+    want = edge_keys(a);
+    for (const auto& k : edge_keys(b)) want.push_back(k);
+    std::sort(want.begin(), want.end());
+  }
+  {
+    catalog::sql::Connection c(v1, catalog::sql::Connection::Mode::ReadWrite);
+    c.exec("DROP TABLE jumps; PRAGMA user_version = 1");
+  }
+  const fs::path out = *dir_ / "merged-jumps.sqlite";
+  fs::remove(out);
+  const auto r = catalog::merge(out, {s1, s2, v1});
+  EXPECT_EQ(r.jump_edges, 4);
+  EXPECT_EQ(r.linked, (std::vector<std::string>{"circle-superellipse", "rectangle-superellipse", "bricks-polkadots"}));
+  {
+    catalog::Store m(out, catalog::Store::Access::Read);
+    auto got = edge_keys(m);
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, want);
+    EXPECT_TRUE(m.integrity_problems().empty());
+    // The copied edges carry their vectors and features unchanged.
+    catalog::Store a(s1, catalog::Store::Access::Read);
+    const auto ja = a.jumps("rectangle"), jm = m.jumps("rectangle");
+    ASSERT_EQ(ja.size(), jm.size());
+    for (size_t i = 0; i < ja.size(); ++i) {
+      EXPECT_EQ(ja[i].packed_b, jm[i].packed_b);
+      EXPECT_EQ(ja[i].features_a.values, jm[i].features_a.values);
+    }
+  }
+  // OUT already links rectangle - superellipse its own way: a merge keeps that, adds nothing twice.
+  {
+    catalog::Store m(out, catalog::Store::Access::Write);
+    m.write_jumps("rectangle", "superellipse", {hand_edge(m, "rectangle", "superellipse", 5, 6, 0.7)});
+  }
+  std::vector<std::string> before;
+  {
+    catalog::Store m(out, catalog::Store::Access::Read);
+    before = edge_keys(m);
+  }
+  const auto again = catalog::merge(out, {s1, s2});
+  EXPECT_TRUE(again.added.empty());
+  EXPECT_TRUE(again.linked.empty());
+  EXPECT_EQ(again.jump_edges, 0);
+  catalog::Store m(out, catalog::Store::Access::Read);
+  EXPECT_EQ(edge_keys(m), before);
+  ASSERT_EQ(m.jumps("rectangle").size(), 1u);
+  EXPECT_DOUBLE_EQ(m.jumps("rectangle").front().similarity, 0.7);
 }
 
 TEST_F(Transform, VersionOneFilesStayReadableAndMigrate) {
