@@ -29,7 +29,8 @@ struct MorphCli {
   std::string db, output, gif, sheet;
   int frames = 120, size = 512, dissolve = 0, depth = 6, max_renders = 800, fps = 24, gif_size = 256, jobs = 0;
   double power = 3.0, threshold = 0.9;
-  bool json = false, no_compare = false, no_connective = false, blend_steps = false;
+  long anchor_evaluations = 160;
+  bool json = false, no_compare = false, no_connective = false, blend_steps = false, no_anchor = false;
 };
 
 bool is_photo(const std::string& arg) {
@@ -136,6 +137,8 @@ void run(const MorphCli& c, const GlobalOptions& global) {
   o.max_renders = c.max_renders;
   o.dissolve = c.dissolve;
   o.connective = !c.no_connective;
+  o.anchor = !c.no_anchor;
+  o.anchor_evaluations = c.anchor_evaluations;
   o.blend_steps = c.blend_steps;
   o.jobs = c.jobs;
   if (!c.output.empty()) check_dimensions(c.size, c.size);
@@ -242,7 +245,8 @@ void add_morph_command(CLI::App& app, GlobalOptions& global) {
       "then halves steps in parameter space until neighbours reach --threshold; frames are spaced evenly\n"
       "in perceptual distance, with the seed and texture domain fixed so noise does not flicker.\n"
       "Between shaders it crosses jump edges made by 'proctex catalog link' (possibly through a\n"
-      "connective shader); --dissolve K cross-fades K frames at each jump.\n"
+      "connective shader) or jumps anchored at the keys; --dissolve K cross-fades K frames at each jump,\n"
+      "timed so each dissolve frame changes the look by the same amount.\n"
       "Reports the max and mean adjacent dissimilarity (1 - S) and layout stability (mean absolute\n"
       "difference of adjacent frames) for the morph and for naive linear interpolation.\n"
       "  proctex morph day.json night.json --frames 120 -o frames/ --gif morph.gif\n"
@@ -263,6 +267,10 @@ void add_morph_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--max-renders", c->max_renders, "Render budget of the subdivision")->capture_default_str()->check(CLI::Range(0, 1000000));
   cmd->add_option("--dissolve", c->dissolve, "Cross-faded frames at each jump between shaders")->capture_default_str()->check(CLI::Range(0, 1000));
   cmd->add_flag("--no-connective", c->no_connective, "Between shaders, only direct jump edges (no third shader)");
+  cmd->add_flag("--no-anchor", c->no_anchor,
+                "Between shaders, only the stored jump edges (default: also jumps anchored at the keys, found now:\n"
+                "the point of each linked shader that looks most like the key)");
+  cmd->add_option("--anchor-evaluations", c->anchor_evaluations, "Renders per anchored jump")->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_flag("--blend-steps", c->blend_steps,
                 "Frames inside a whole step of a discrete parameter cross-fade its two ends (default: they pop;\n"
                 "cross-fades change the layout less but are less similar to their neighbours)");

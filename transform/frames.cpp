@@ -118,6 +118,44 @@ std::vector<Image> render_frames(const std::vector<Frame>& frames, size_t first,
   return a;
 }
 
+std::vector<double> dissolve_curve(const TextureSpec& a, const TextureSpec& b, Renderer& renderer, int resolution,
+                                   int jobs, int samples) {
+  samples = std::max(samples, 2);
+  std::vector<Frame> ends(2);
+  ends[0].spec = a;
+  ends[1].spec = b;
+  RenderSettings rs;
+  rs.width = rs.height = resolution;
+  const auto images = render_frames(ends, 0, 2, renderer, rs);
+  const auto& metric = metrics::default_metric();
+  std::vector<metrics::Features> f(samples + 1);
+  parallel_for(f.size(), jobs, [&](size_t k) {
+    Image blend = images[0];
+    const float t = static_cast<float>(double(k) / samples);
+    for (size_t i = 0; i < blend.pixels.size(); ++i) blend.pixels[i] += t * (images[1].pixels[i] - blend.pixels[i]);
+    f[k] = metric.features(blend, resolution);
+  });
+  // Floored so that a flat stretch of the curve stays strictly increasing (invertible).
+  std::vector<double> length(samples + 1, 0.0);
+  for (int k = 1; k <= samples; ++k)
+    length[k] = length[k - 1] + std::max(1e-9, -std::log(std::clamp(metric.similarity(f[k - 1], f[k]), 1e-4, 1.0)));
+  return length;
+}
+
+std::vector<double> dissolve_blends(const std::vector<double>& curve, int count) {
+  std::vector<double> out;
+  const int samples = static_cast<int>(curve.size()) - 1;
+  if (count <= 0 || samples < 1) return out;
+  int k = 1;
+  for (int d = 1; d <= count; ++d) {
+    const double target = curve.back() * d / (count + 1);
+    while (k < samples && curve[k] < target) ++k;
+    const double t = (k - 1 + (target - curve[k - 1]) / (curve[k] - curve[k - 1])) / samples;
+    out.push_back(std::clamp(t, 1e-6, 1 - 1e-6));
+  }
+  return out;
+}
+
 double layout_difference(const Image& a, const Image& b) {
   if (a.width != b.width || a.height != b.height || a.pixels.empty()) return 0;
   double s = 0;

@@ -58,6 +58,17 @@ std::vector<metrics::Features> render_features(Renderer& renderer, const ShaderD
 std::vector<Image> render_frames(const std::vector<Frame>& frames, size_t first, size_t count, Renderer& renderer,
                                  const RenderSettings& settings);
 
+// The perceptual length along a pixel cross-fade from the render of `a` to that of `b` at
+// `resolution`: the cross-fade sampled at `samples` + 1 evenly spaced blend weights, element k the
+// metric's distance -ln S summed from blend 0 to blend k / samples. A pixel cross-fade does not
+// change the look evenly (the metric sees the first traces of a new texture most), so equal pixel
+// weights make uneven steps; and its total length is what a dissolve costs.
+std::vector<double> dissolve_curve(const TextureSpec& a, const TextureSpec& b, Renderer& renderer, int resolution,
+                                   int jobs, int samples = 16);
+// Blend weights (ascending, in (0, 1)) of `count` dissolve frames at equal perceptual distances
+// along `curve` (linear within a sample interval).
+std::vector<double> dissolve_blends(const std::vector<double>& curve, int count);
+
 // Mean absolute difference of two equally sized images in sRGB [0, 1].
 double layout_difference(const Image& a, const Image& b);
 

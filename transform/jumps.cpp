@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "metrics/metric.h"
+#include "search/colour_fit.h"
 #include "search/objective.h"
 #include "search/refine.h"
 #include "shaders/parameter_space.h"
@@ -162,6 +163,108 @@ std::vector<catalog::JumpEdge> find_jumps(const catalog::ShaderCatalogue& a, con
   local.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (report) *report = local;
   return out;
+}
+
+namespace {
+
+// `packed` (of `to`) with every searchable parameter that `from` declares under the same name and
+// type taken from `source` (clamped to to's range): shaders of one family share names for the
+// same thing (fg, bg, softness), so a start that already agrees there is closer.
+std::vector<float> with_shared_names(const ShaderDecl& to, std::vector<float> packed, const ShaderDecl& from,
+                                     const std::vector<float>& source) {
+  for (const auto& p : to.params) {
+    const ParamDecl* q = from.find(p.name);
+    if (!p.searchable || !q || q->type != p.type || q->width() != p.width()) continue;
+    for (int c = 0; c < p.width(); ++c) packed[p.offset + c] = std::clamp(source[q->offset + c], p.min, p.max);
+  }
+  return packed;
+}
+
+}  // namespace
+
+catalog::JumpEdge anchor_jump(const std::string& shader, const std::vector<float>& packed, uint32_t key_seed,
+                              const metrics::Features& features, const catalog::ShaderCatalogue& other,
+                              const std::vector<float>& base, uint32_t seed, Renderer& renderer,
+                              const AnchorOptions& o) {
+  check_current(other);
+  const auto& metric = metrics::default_metric();
+  const ShaderDecl& dk = renderer.library().get(shader);
+  const ShaderDecl& dt = renderer.library().get(other.shader);
+  const ParameterSpace space(dt, base);
+  const int full = features.resolution;
+  const int coarse = std::clamp(o.resolution / 16 * 16, metrics::kMinResolution, full);
+
+  // Start points: the catalogue samples of `other` most similar to the texture (stored features),
+  // each also with the parameters the two shaders share by name taken from the texture; then their
+  // colours fitted to the texture's render (search::fit_colours, the matcher's closed-form fit).
+  std::vector<std::pair<double, int>> ranked;
+  for (size_t i = 0; i < other.samples.size(); ++i)
+    ranked.emplace_back(metric.similarity(features, other.samples[i].features), static_cast<int>(i));
+  const size_t top = std::min<size_t>(std::max(o.starts, 1), ranked.size());
+  std::partial_sort(ranked.begin(), ranked.begin() + top, ranked.end(), std::greater<>());
+  std::vector<std::vector<float>> starts;
+  for (size_t k = 0; k < top; ++k) {
+    const auto p = space.to_packed(space.to_unit(other.samples[ranked[k].second].packed));
+    starts.push_back(p);
+    starts.push_back(space.to_packed(space.to_unit(with_shared_names(dt, p, dk, packed))));
+  }
+  RenderSettings rs;
+  rs.width = rs.height = coarse;
+  const Image key_image = renderer.render_batch(dk, {packed}, {key_seed}, rs).front();
+  const metrics::Features target = metric.features(key_image, coarse);
+  const auto fits = search::fit_colours(dt, starts, std::vector<uint32_t>(starts.size(), seed), {},
+                                        search::make_colour_target(key_image), renderer, false);
+  for (size_t k = 0; k < fits.size(); ++k)
+    if (fits[k].fitted) starts.push_back(space.to_packed(space.to_unit(fits[k].packed)));
+
+  // Refine the best starts at the coarse resolution (one launch scores them all).
+  search::Objective ob(space, target, metric, renderer, seed, coarse);
+  std::vector<std::vector<double>> units;
+  for (const auto& p : starts) units.push_back(space.to_unit(p));
+  const auto start_scores = ob.evaluate(units);
+  std::vector<size_t> order(units.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return start_scores[a] > start_scores[b]; });
+  const size_t refined = std::min<size_t>(2, order.size());
+  search::RefineOptions ro;
+  ro.max_evaluations = std::max<long>(1, o.evaluations / static_cast<long>(refined));
+  ro.max_restarts = 1;
+  std::vector<std::vector<float>> candidates = {space.to_packed(units[order[0]])};
+  double best = -1;
+  std::vector<double> best_unit;
+  for (size_t k = 0; k < refined; ++k) {
+    const auto r = search::refine(ob, units[order[k]], ro);
+    if (r.similarity > best) {
+      best = r.similarity;
+      best_unit = r.unit;
+    }
+  }
+  candidates.push_back(space.to_packed(best_unit));
+  // The coarse optimum is a proxy: keep whichever of it and the best start looks more alike at the
+  // catalogue resolution.
+  const auto scored = render_features(renderer, dt, candidates, std::vector<uint32_t>(candidates.size(), seed), full, 1);
+  std::vector<double> sims;
+  size_t pick = 0;
+  for (size_t i = 0; i < scored.size(); ++i) {
+    sims.push_back(metric.similarity(features, scored[i]));
+    if (sims[i] > sims[pick]) pick = i;
+  }
+  catalog::JumpEdge e;
+  e.shader_a = shader;
+  e.shader_b = other.shader;
+  e.packed_a = packed;
+  e.packed_b = candidates[pick];
+  e.seed_a = key_seed;
+  e.seed_b = seed;
+  e.features_a = features;
+  e.features_b = scored[pick];
+  e.similarity = sims[pick];
+  e.info = {{"anchored", true},
+            {"start", {{"sample", ranked[0].second}, {"similarity", ranked[0].first}, {"best_start", sims[0]}}},
+            {"refined", pick > 0},
+            {"evaluations", ob.evaluations() + static_cast<long>(2 + search::colour_fit_renders(dt, {}, fits.size()))},
+            {"resolution", coarse}};
+  return e;
 }
 
 std::vector<std::pair<std::string, std::string>> choose_pairs(catalog::Store& store, const std::vector<std::string>& shaders,

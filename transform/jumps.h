@@ -44,6 +44,25 @@ struct PairReport {
 std::vector<catalog::JumpEdge> find_jumps(const catalog::ShaderCatalogue& a, const catalog::ShaderCatalogue& b,
                                           Renderer& renderer, const LinkOptions& options, PairReport* report = nullptr);
 
+// A jump anchored at a texture, found at morph time: the point of shader `other` whose render looks
+// most like the render of `packed` in `shader` (features `features`, seed `key_seed`, catalogue
+// resolution). Starts: the `starts` catalogue samples of `other` most similar to the texture
+// (stored features, no render), each as is and with the parameters both shaders name alike taken
+// from the texture, and each with its colours fitted to the texture (search::fit_colours). The two
+// best starts are refined with search::refine at `resolution`, as find_jumps does; the refined
+// point and the best start are scored at the catalogue resolution with `seed` (the morph's) and the
+// better one is kept. `base` gives the values of other's non-searchable
+// parameters. The edge's `shader_a` end is the texture itself.
+struct AnchorOptions {
+  long evaluations = 160;  // renders of the refinement, split over its two best starts
+  int starts = 3;          // catalogue samples tried as starts
+  int resolution = 128;
+};
+catalog::JumpEdge anchor_jump(const std::string& shader, const std::vector<float>& packed, uint32_t key_seed,
+                              const metrics::Features& features, const catalog::ShaderCatalogue& other,
+                              const std::vector<float>& base, uint32_t seed, Renderer& renderer,
+                              const AnchorOptions& options);
+
 struct LinkProgress {
   std::string a, b;
   int index = 0, total = 0;  // pair being linked

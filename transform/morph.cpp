@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/version.h"
 #include "metrics/metric.h"
+#include "transform/jumps.h"
 #include "transform/path.h"
 #include "transform/space.h"
 
@@ -48,6 +49,18 @@ class Context {
     return *it->second;
   }
   const ShaderDecl& decl(const std::string& shader) { return renderer_.library().get(shader); }
+  Renderer& renderer() { return renderer_; }
+
+  // Perceptual length along the pixel cross-fade of two frames (frames.h dissolve_curve), cached.
+  const std::vector<double>& dissolve(const TextureSpec& a, const TextureSpec& b, int resolution) {
+    const std::string key = a.to_json().dump() + "|" + b.to_json().dump();
+    auto it = dissolves_.find(key);
+    if (it == dissolves_.end()) {
+      it = dissolves_.emplace(key, dissolve_curve(a, b, renderer_, resolution, jobs_)).first;
+      renders += 2;
+    }
+    return it->second;
+  }
 
   // Features of many (shader, packed, seed) at `resolution`, one launch per shader.
   struct Request {
@@ -81,6 +94,7 @@ class Context {
   int jobs_;
   std::map<std::string, catalog::ShaderCatalogue> cats_;
   std::map<std::string, std::unique_ptr<MorphSpace>> spaces_;
+  std::map<std::string, std::vector<double>> dissolves_;
 };
 
 struct Key {
@@ -142,7 +156,7 @@ std::vector<Waypoint> segment_path(Context& ctx, const Key& ka, const Key& kb, i
       const auto& packed = side ? j.packed_b : j.packed_a;
       const auto& f = side ? j.features_b : j.features_a;
       const int id = g.add_vertex();
-      v.push_back({s, packed, &f, "jump", -1});
+      v.push_back({s, packed, &f, j.info.value("anchored", false) ? "anchor" : "jump", -1});
       for (int m : members[s]) g.add_edge(id, m, 1 - metric.similarity(f, *v[m].features));
       members[s].push_back(id);
       ends[side] = id;
@@ -161,7 +175,7 @@ std::vector<Waypoint> segment_path(Context& ctx, const Key& ka, const Key& kb, i
     double best = -1;
     for (int m : members[key.spec.shader]) {
       const double s = metric.similarity(key.features, *v[m].features);
-      if (v[m].kind == "jump") g.add_edge(id, m, 1 - s);
+      if (v[m].kind == "jump" || v[m].kind == "anchor") g.add_edge(id, m, 1 - s);
       if (v[m].kind == "vertex" && s > best) {
         best = s;
         snapped[k] = m;
@@ -342,6 +356,101 @@ std::vector<int> apportion(const std::vector<double>& weights, int total) {
   return out;
 }
 
+// `total` steps over units of perceptual `lengths`, each at least `minimum` (sum <= total): units
+// whose proportional share falls below their minimum get the minimum, the others share the rest
+// in proportion to their length - so steps are as equal in perceptual length as the minimums
+// allow. Units of weight 0 (whole steps) keep their minimum.
+std::vector<int> allocate(const std::vector<double>& lengths, const std::vector<int>& minimum, int total) {
+  const size_t n = lengths.size();
+  std::vector<bool> pinned(n);
+  for (size_t i = 0; i < n; ++i) pinned[i] = lengths[i] <= 0;
+  int rest = total;
+  for (bool changed = true; changed;) {
+    changed = false;
+    double sum = 0;
+    rest = total;
+    for (size_t i = 0; i < n; ++i) {
+      if (pinned[i]) rest -= minimum[i];
+      else sum += lengths[i];
+    }
+    for (size_t i = 0; i < n; ++i)
+      if (!pinned[i] && rest * lengths[i] / sum < minimum[i]) pinned[i] = changed = true;
+  }
+  // A free unit's share is at least its (whole) minimum, so its floor is too.
+  std::vector<double> w(n, 0.0);
+  bool any_free = false;
+  for (size_t i = 0; i < n; ++i) {
+    w[i] = pinned[i] ? 0.0 : lengths[i];
+    any_free |= !pinned[i];
+  }
+  std::vector<int> out = minimum;
+  if (!any_free) {  // every unit at its minimum: the steps left go by length to those that have one
+    for (size_t i = 0; i < n; ++i) w[i] = std::max(0.0, lengths[i]);
+    const auto extra = apportion(w, rest);
+    for (size_t i = 0; i < n; ++i) out[i] += extra[i];
+    return out;
+  }
+  const auto share = apportion(w, rest);
+  for (size_t i = 0; i < n; ++i)
+    if (!pinned[i]) out[i] = share[i];
+  return out;
+}
+
+// The spec waypoint i renders as a frame of its own: a key's exact input (its own seed), else the
+// waypoint at the path's seed.
+TextureSpec waypoint_spec(Context& ctx, const Waypoint& w, const std::vector<Key>& keys, uint32_t seed) {
+  if (w.key >= 0) return spec_from_packed(ctx.decl(w.shader), keys[w.key].packed, keys[w.key].spec.seed);
+  return spec_from_packed(ctx.decl(w.shader), w.packed, seed);
+}
+
+// Perceptual length of the edge from waypoint i to i + 1 as the frames will cross it: a jump is
+// crossed by a dissolve (the measured length of the cross-fade), any other edge by interpolation.
+double edge_length(Context& ctx, const std::vector<Waypoint>& path, size_t i, const std::vector<Key>& keys,
+                   uint32_t seed, int resolution, int dissolve) {
+  if (!path[i].jump || dissolve <= 0) return step_length(path[i].similarity);
+  return ctx.dissolve(waypoint_spec(ctx, path[i], keys, seed), waypoint_spec(ctx, path[i + 1], keys, seed), resolution).back();
+}
+
+// Between keys in two shaders that catalog link joined directly, a dissolve of the keys themselves
+// is a route too. It replaces the refined route when its measured perceptual length is shorter:
+// frames are spread evenly in perceptual length, so the shorter route has the smaller steps. (With
+// the default metric a cross-fade of two flat shapes is shorter than any shape change: docs/morph.md.)
+void prefer_shorter_dissolves(Context& ctx, std::vector<Waypoint>& path, const std::vector<Key>& keys,
+                              const std::set<std::pair<std::string, std::string>>& linked, uint32_t seed,
+                              int resolution, int dissolve, nlohmann::json& segments) {
+  const auto& metric = metrics::default_metric();
+  std::vector<size_t> at;  // waypoint index of each key
+  for (size_t i = 0; i < path.size(); ++i)
+    if (path[i].key >= 0) at.push_back(i);
+  std::vector<Waypoint> out;
+  for (size_t k = 0; k + 1 < at.size(); ++k) {
+    const size_t a = at[k], b = at[k + 1];
+    if (k == 0) out.push_back(path[a]);
+    const std::string& sa = path[a].shader;
+    const std::string& sb = path[b].shader;
+    const bool candidate = dissolve > 0 && sa != sb && linked.count({std::min(sa, sb), std::max(sa, sb)});
+    double route = 0, direct = 0;
+    if (candidate) {
+      for (size_t i = a; i < b; ++i) route += edge_length(ctx, path, i, keys, seed, resolution, dissolve);
+      direct = ctx.dissolve(waypoint_spec(ctx, path[a], keys, seed), waypoint_spec(ctx, path[b], keys, seed), resolution).back();
+      segments[k]["route_length"] = route;
+      segments[k]["dissolve_length"] = direct;
+    }
+    if (candidate && direct < route) {
+      out.back().jump = true;
+      out.back().reached = true;
+      out.back().note.clear();
+      out.back().similarity = metric.similarity(path[a].features, path[b].features);
+      segments[k]["route"] = "dissolve of the keys";
+    } else {
+      for (size_t i = a + 1; i < b; ++i) out.push_back(path[i]);
+      if (candidate) segments[k]["route"] = "path";
+    }
+    out.push_back(path[b]);
+  }
+  path = std::move(out);
+}
+
 // Frames from the refined path. The path is cut into units: atoms, which one frame step must
 // cross whole (a jump edge, plus its dissolve frames; a pure whole step of a discrete parameter),
 // and continuous stretches between atoms and keys. Every unit gets its minimum (one step, or
@@ -350,7 +459,7 @@ std::vector<int> apportion(const std::vector<double>& weights, int total) {
 // frame changes about the same amount, and a whole step never shares a frame step with other
 // change. When the frames are too few for that, whole steps are treated as continuous again.
 std::vector<Frame> resample(Context& ctx, const std::vector<Waypoint>& path, const std::vector<Key>& keys, int frames,
-                            int dissolve, bool blend_steps, uint32_t seed) {
+                            int dissolve, bool blend_steps, uint32_t seed, int resolution) {
   struct Unit {
     bool atom = false, jump = false;
     size_t first = 0, last = 0;  // waypoints: the unit spans edges first .. last-1
@@ -377,7 +486,7 @@ std::vector<Frame> resample(Context& ctx, const std::vector<Waypoint>& path, con
       }
     }
     for (auto& u : units)
-      for (size_t i = u.first; i < u.last; ++i) u.length += step_length(path[i].similarity);
+      for (size_t i = u.first; i < u.last; ++i) u.length += edge_length(ctx, path, i, keys, seed, resolution, dissolve);
     return units;
   };
   auto required = [](const std::vector<Unit>& units) {
@@ -395,24 +504,26 @@ std::vector<Frame> resample(Context& ctx, const std::vector<Waypoint>& path, con
                                  "{} jump(s){})", frames, need, jumps, dissolve ? ", dissolve frames" : ""),
                      fmt::format("use --frames {} or more", need));
   }
+  // Stretches and dissolves share the steps by perceptual length (a dissolve gets at least its
+  // --dissolve frames); whole steps and hard cuts take one step each.
   std::vector<double> weights;
+  std::vector<int> minimum;
   bool any_stretch = false;
   for (const auto& u : units) {
-    weights.push_back(u.atom ? 0.0 : u.length);
-    any_stretch |= !u.atom;
+    const bool shares = !u.atom || (u.jump && dissolve > 0);
+    weights.push_back(shares ? u.length : 0.0);
+    minimum.push_back(u.steps);
+    any_stretch |= shares;
   }
   if (!any_stretch && frames > need)
     throw UsageError(fmt::format("this morph is {} frames of jumps; --frames {} leaves frames with nothing to show", need, frames),
-                     fmt::format("use --frames {} or a larger --dissolve", need));
-  if (any_stretch) {
-    // Equal shares when every stretch has length 0 (identical keys): only stretches get frames.
-    double sum = 0;
-    for (double w : weights) sum += w;
-    if (sum <= 0)
-      for (size_t k = 0; k < units.size(); ++k) weights[k] = units[k].atom ? 0.0 : 1.0;
-    const auto extra = apportion(weights, frames - need);
-    for (size_t k = 0; k < units.size(); ++k) units[k].steps += extra[k];
-  }
+                     fmt::format("use --frames {} or a --dissolve", need));
+  double sum = 0;
+  for (double w : weights) sum += w;
+  if (sum <= 0)  // every stretch has length 0 (identical keys): equal shares
+    for (size_t k = 0; k < units.size(); ++k) weights[k] = units[k].atom && !(units[k].jump && dissolve > 0) ? 0.0 : 1.0;
+  const auto steps = allocate(weights, minimum, frames - 1);
+  for (size_t k = 0; k < units.size(); ++k) units[k].steps = steps[k];
   double total_length = 0;
   for (const auto& u : units) total_length += u.length;
   auto norm = [&](double p) { return total_length > 0 ? p / total_length : 0.0; };
@@ -447,11 +558,14 @@ std::vector<Frame> resample(Context& ctx, const std::vector<Waypoint>& path, con
     if (u.atom) {
       const Frame from = out.back();
       const Frame to = frame_at(u.last, 0, position + u.length);
+      // Dissolve frames at equal perceptual distances along the cross-fade of the jump's ends.
+      const auto blends = u.steps > 1 ? dissolve_blends(ctx.dissolve(from.spec, to.spec, resolution), u.steps - 1)
+                                      : std::vector<double>();
       for (int d = 1; d < u.steps; ++d) {  // dissolve frames
         Frame f = from;
         f.key = -1;
         f.blend_to = to.spec;
-        f.blend = double(d) / u.steps;
+        f.blend = blends[d - 1];
         f.jump = d == 1;
         f.position = norm(position + u.length * f.blend);
         out.push_back(std::move(f));
@@ -613,7 +727,8 @@ Morph plan(const std::vector<TextureSpec>& inputs, catalog::Store& store, Render
   // One path per pair of consecutive keys.
   report("path", 0);
   const auto t_path = Clock::now();
-  nlohmann::json segments = nlohmann::json::array();
+  nlohmann::json segments = nlohmann::json::array(), anchors = nlohmann::json::array();
+  long anchor_renders = 0;
   for (size_t i = 0; i + 1 < keys.size(); ++i) {
     const std::string& sa = keys[i].spec.shader;
     const std::string& sb = keys[i + 1].spec.shader;
@@ -633,7 +748,34 @@ Morph plan(const std::vector<TextureSpec>& inputs, catalog::Store& store, Render
           throw Error("no jump edge joins '" + sa + "' and '" + sb + "' directly", "allow connective shaders, or link the pair");
       }
     }
-    auto seg = segment_path(ctx, keys[i], keys[i + 1], static_cast<int>(i), static_cast<int>(i + 1), allowed, jumps, o.power, segments);
+    std::vector<catalog::JumpEdge> seg_jumps = jumps;
+    if (sa != sb && o.anchor) {
+      // Anchored jumps: each key into every allowed shader catalog link joined to its shader.
+      // Non-searchable parameters of the point come from the segment's key in that shader.
+      AnchorOptions ao;
+      ao.evaluations = o.anchor_evaluations;
+      for (size_t k : {i, i + 1}) {
+        const Key& key = keys[k];
+        std::set<std::string> partners;
+        for (const auto& j : jumps) {
+          if (j.shader_a == key.spec.shader && allowed.count(j.shader_b)) partners.insert(j.shader_b);
+          if (j.shader_b == key.spec.shader && allowed.count(j.shader_a)) partners.insert(j.shader_a);
+        }
+        for (const auto& t : partners) {
+          const Key& other = keys[k == i ? i + 1 : i];
+          const auto base = other.spec.shader == t ? other.packed : ctx.decl(t).default_packed();
+          const auto ta = Clock::now();
+          auto e = anchor_jump(key.spec.shader, key.packed, key.spec.seed, key.features, ctx.catalogue(t), base, m.seed,
+                               renderer, ao);
+          anchors.push_back({{"key", k}, {"shader", t}, {"similarity", e.similarity}, {"seconds", seconds_since(ta)},
+                             {"info", e.info}});
+          anchor_renders += e.info.value("evaluations", 0L) + 3;
+          seg_jumps.push_back(std::move(e));
+        }
+      }
+    }
+    auto seg = segment_path(ctx, keys[i], keys[i + 1], static_cast<int>(i), static_cast<int>(i + 1), allowed, seg_jumps,
+                            o.power, segments);
     carry_fixed_parameters(ctx, seg, keys[i], keys[i + 1]);
     if (!m.path.empty()) m.path.pop_back();  // the key shared with the previous segment
     for (auto& w : seg) {
@@ -645,10 +787,6 @@ Morph plan(const std::vector<TextureSpec>& inputs, catalog::Store& store, Render
     report("path", double(i + 1) / (keys.size() - 1));
   }
   for (size_t i = 0; i + 1 < m.path.size(); ++i) m.path[i].jump = m.path[i].shader != m.path[i + 1].shader;
-  for (const auto& w : m.path) {
-    if (m.shaders.empty() || m.shaders.back() != w.shader) m.shaders.push_back(w.shader);
-    m.jumps += w.jump;
-  }
 
   // Every waypoint at the path's seed (spatial coherence), then the similarity of each edge.
   {
@@ -666,11 +804,21 @@ Morph plan(const std::vector<TextureSpec>& inputs, catalog::Store& store, Render
   report("subdivide", 0);
   const auto t_sub = Clock::now();
   subdivide(ctx, m.path, o, m.seed, m.resolution, [&](double f) { report("subdivide", f); });
+  if (o.anchor) {
+    std::set<std::pair<std::string, std::string>> linked;
+    for (const auto& j : jumps) linked.insert({std::min(j.shader_a, j.shader_b), std::max(j.shader_a, j.shader_b)});
+    prefer_shorter_dissolves(ctx, m.path, keys, linked, m.seed, m.resolution, o.dissolve, segments);
+  }
+  for (const auto& w : m.path) {
+    if (m.shaders.empty() || m.shaders.back() != w.shader) m.shaders.push_back(w.shader);
+    m.jumps += w.jump;
+  }
   report("frames", 0);
-  m.frames = resample(ctx, m.path, keys, o.frames, o.dissolve, o.blend_steps, m.seed);
+  m.frames = resample(ctx, m.path, keys, o.frames, o.dissolve, o.blend_steps, m.seed, m.resolution);
   m.stats = {{"segments", segments},
              {"graph_waypoints", graph_waypoints},
-             {"renders", {{"keys_and_path", path_renders}, {"subdivision", ctx.renders - path_renders}}},
+             {"anchors", anchors},
+             {"renders", {{"keys_and_path", path_renders}, {"anchors", anchor_renders}, {"subdivision", ctx.renders - path_renders}}},
              {"seconds", {{"path", path_seconds}, {"subdivision", seconds_since(t_sub)}, {"plan", seconds_since(t0)}}}};
   return m;
 }

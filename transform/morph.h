@@ -12,6 +12,11 @@
 //      different shaders, the graphs of every shader joined to them by jump edges (catalog link),
 //      so a path may pass through a connective shader. Each key is joined to its closest catalogue
 //      vertex (the thesis's snapping) and, when both keys share a shader, to the other key.
+//      Beyond the thesis, between shaders: anchored jumps. For each shader t that catalog link
+//      joined to a key's shader, the point of t that looks most like the key (search::refine at
+//      morph time, jumps.h anchor_jump) is joined to the key by a jump edge, so the path can cross
+//      where the two shaders look alike *at the key* instead of wandering to a jump point
+//      anywhere in both domains;
 //   2. Dijkstra with the power-n cost of eq 5.1 (path.h);
 //   3. adaptive linear subdivision in the normalised parameter space (space.h) while adjacent
 //      waypoints are less similar than `threshold`, up to `max_depth` halvings per catalogue edge
@@ -21,7 +26,8 @@
 // Then, beyond the thesis:
 //   4. frame timing: exactly `frames` frames, spaced evenly in perceptual distance (the metric's
 //      distance -ln S summed along the path), keys and jump ends on frames of their own, `dissolve`
-//      cross-faded frames at each jump;
+//      cross-faded frames at each jump, their blend weights at equal perceptual distances along
+//      the cross-fade (measured on blends of the two ends' renders);
 //   5. whole steps: a discrete parameter (rows, an enum) changes by one whole value at a time;
 //      with `blend_steps` the frames that fall inside such a step cross-fade the renders of its
 //      two ends instead of popping. Off by default: measured, the cross-fades are less similar to
@@ -50,6 +56,8 @@ struct MorphOptions {
   int max_renders = 800;    // subdivision renders for the whole morph
   int dissolve = 0;         // cross-faded frames at each jump
   bool connective = true;   // cross-shader segments may pass through other linked shaders
+  bool anchor = true;       // cross-shader segments also get jumps anchored at their keys
+  long anchor_evaluations = 160;  // renders per anchored jump (search::refine)
   bool blend_steps = false;  // frames inside a whole step of a discrete parameter cross-fade its ends
   int jobs = 0;             // metric threads (0: all cores)
 };
@@ -58,7 +66,8 @@ struct MorphOptions {
 struct Waypoint {
   std::string shader;
   std::vector<float> packed;
-  std::string kind;   // "key", "vertex" (catalogue sample), "jump" (jump point), "subdivision"
+  std::string kind;   // "key", "vertex" (catalogue sample), "jump" (jump point of catalog link),
+                      // "anchor" (jump point anchored at a key), "subdivision"
   int key = -1;       // input index of a key
   int sample = -1;    // catalogue sample index of a vertex
   int depth = 0;      // subdivision depth of the edge to the next waypoint

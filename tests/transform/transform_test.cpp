@@ -298,12 +298,69 @@ TEST_F(Transform, CrossShaderSequenceUsesAJumpEdge) {
     }
   }
   EXPECT_EQ(jump_frames, 1);
-  EXPECT_EQ(dissolves, 2);
+  // --dissolve K is the least number of cross-faded frames; a dissolve gets more when its measured
+  // perceptual length calls for them. Blend weights rise along the cross-fade.
+  EXPECT_GE(dissolves, 2);
+  for (size_t i = 1; i < m.frames.size(); ++i)
+    if (m.frames[i].blend_to && m.frames[i - 1].blend_to) {
+      EXPECT_GT(m.frames[i].blend, m.frames[i - 1].blend) << "frame " << i;
+    }
   // Subdivision never crosses the jump edge: the waypoints on both sides keep their shaders.
   for (size_t i = 0; i + 1 < m.path.size(); ++i)
     if (m.path[i].shader != m.path[i + 1].shader) {
       EXPECT_TRUE(m.path[i].jump);
     }
+}
+
+TEST(Dissolve, BlendsSitAtEqualPerceptualDistancesAlongTheCurve) {
+  // Two sample intervals of lengths 3 and 1: one frame halfway in length (2) is 2/3 into the first
+  // interval, at blend (2/3) / 2; three frames at lengths 1, 2, 3 end exactly at the first sample.
+  const std::vector<double> curve = {0.0, 3.0, 4.0};
+  const auto one = dissolve_blends(curve, 1);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_NEAR(one[0], 1.0 / 3.0, 1e-12);
+  const auto three = dissolve_blends(curve, 3);
+  ASSERT_EQ(three.size(), 3u);
+  EXPECT_NEAR(three[0], 1.0 / 6.0, 1e-12);
+  EXPECT_NEAR(three[1], 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(three[2], 0.5, 1e-12);
+  EXPECT_TRUE(dissolve_blends(curve, 0).empty());
+}
+
+TEST_F(Transform, CrossShaderMorphBeatsThePlainCrossFade) {
+  // Issue 7: the morph must beat naive interpolation on the largest adjacent step, across shaders
+  // too (the naive sequence there is a cross-fade with equal pixel weights).
+  const fs::path p = copy_db("crossfade.sqlite");
+  {
+    catalog::Store store(p, catalog::Store::Access::Write);
+    link(store, {{"circle", "rectangle"}}, quick_link(), renderer_);
+  }
+  catalog::Store store(p, catalog::Store::Access::Read);
+  const auto a = spec("rectangle:width=0.7,height=0.3"), b = spec("circle:size=0.5");
+  MorphOptions o = quick(16);
+  o.dissolve = 2;
+  o.anchor_evaluations = 24;
+  Morph m = plan({a, b}, store, renderer_, o);
+  EXPECT_EQ(m.jumps, 1);
+  expect_same_texture(m.frames.front().spec, a);
+  expect_same_texture(m.frames.back().spec, b);
+  m.quality = measure(m.frames, renderer_, m.resolution, 2);
+  auto lin = linear_frames({a, b}, 16, renderer_.library());
+  m.linear = measure(lin, renderer_, m.resolution, 2);
+  EXPECT_LT(m.quality->max_dissimilarity, m.linear->max_dissimilarity)
+      << "morph " << m.quality->to_json() << " cross-fade " << m.linear->to_json() << " " << m.stats.dump();
+  // Anchored jumps were found for both keys, each at least as alike as the best start it tried and
+  // weighted by the similarity of its stored features.
+  ASSERT_EQ(m.stats["anchors"].size(), 2u);
+  for (const auto& an : m.stats["anchors"]) EXPECT_GE(an["similarity"].get<double>(), an["info"]["start"]["best_start"].get<double>());
+  const auto cat = store.load("circle", false);
+  const ShaderDecl& rect = renderer_.library().get("rectangle");
+  const auto pa = resolve(rect, a);
+  const auto fa = render_features(renderer_, rect, {pa}, {a.seed}, m.resolution, 1).front();
+  const auto e = anchor_jump("rectangle", pa, a.seed, fa, cat, renderer_.library().get("circle").default_packed(), a.seed,
+                             renderer_, {.evaluations = 24});
+  EXPECT_EQ(e.shader_b, "circle");
+  EXPECT_NEAR(metrics::default_metric().similarity(e.features_a, e.features_b), e.similarity, 1e-9);
 }
 
 TEST_F(Transform, ConnectiveShaderCarriesRectangleToCircle) {
