@@ -265,7 +265,7 @@ void add_morph_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--threshold", c->threshold, "Subdivide until adjacent waypoints reach this similarity")->capture_default_str()->check(CLI::Range(0.01, 0.999));
   cmd->add_option("--depth", c->depth, "Maximum halvings per catalogue edge")->capture_default_str()->check(CLI::Range(0, 16));
   cmd->add_option("--max-renders", c->max_renders, "Render budget of the subdivision")->capture_default_str()->check(CLI::Range(0, 1000000));
-  cmd->add_option("--dissolve", c->dissolve, "Cross-faded frames at each jump between shaders")->capture_default_str()->check(CLI::Range(0, 1000));
+  cmd->add_option("--dissolve", c->dissolve, "Least number of cross-faded frames at each jump between shaders (more when the cross-fade is long)")->capture_default_str()->check(CLI::Range(0, 1000));
   cmd->add_flag("--no-connective", c->no_connective, "Between shaders, only direct jump edges (no third shader)");
   cmd->add_flag("--no-anchor", c->no_anchor,
                 "Between shaders, only the stored jump edges (default: also jumps anchored at the keys, found now:\n"
