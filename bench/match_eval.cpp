@@ -1,11 +1,13 @@
 // Evaluation of `proctex match` (issue 6): synthetic recovery and real photos.
 //   bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR]
 //                    [--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K]
+//                    [--candidates M] [--screen-resolution R]
 // Synthetic: N targets, target i from shader i mod L of the library (sorted by name) at a random
 // point of its unit parameter space (a portable random stream from --seed, so not a catalogue
 // sample) rendered at 256x256 with render seed 7000000 + i (the catalogue's render seeds are
 // drawn from its own stream). Each target is matched against the whole catalogue with the
-// default options. Reported: shader identified (top-1), final similarity, verdict, time; for
+// default options. Reported: shader identified (top-1), the target shader's rank in the structural
+// scan of the catalogue (what --candidates cuts), final similarity, verdict, time; for
 // deterministic shaders (two render seeds give the same image) the parameter error: mean
 // |unit difference| over the searchable dimensions and whether every discrete parameter is exact.
 // Photos: every image in --photos is matched, with a side-by-side picture in --pictures.
@@ -62,14 +64,15 @@ Image side_by_side_tile(const Image& img, int side) { return resize(center_crop_
 
 int main(int argc, char** argv) {
   std::string db, photos, pictures, markdown, only;
-  int targets = 53, starts = -1;
+  int targets = 53, starts = -1, candidates = -1, screen_resolution = -1;
   long evaluations = -1;
   uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
-                "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K]");
+                "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
+                "[--screen-resolution R]");
       return 0;
     }
     if (i + 1 >= argc) {
@@ -86,6 +89,8 @@ int main(int argc, char** argv) {
     else if (a == "--shaders") only = v;
     else if (a == "--evaluations") evaluations = std::stol(v);
     else if (a == "--starts") starts = std::stoi(v);
+    else if (a == "--candidates") candidates = std::stoi(v);
+    else if (a == "--screen-resolution") screen_resolution = std::stoi(v);
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -110,14 +115,16 @@ int main(int argc, char** argv) {
     search::MatchOptions options;
     if (evaluations > 0) options.refine.max_evaluations = evaluations;
     if (starts > 0) options.starts = starts;
+    if (candidates >= 0) options.candidate_shaders = candidates;
+    if (screen_resolution > 0) options.screen_resolution = screen_resolution;
     if (!pictures.empty()) fs::create_directories(pictures);
     Renderer renderer(lib);
     Random rng{seed};
 
     std::string table =
-        "| # | target shader | matched | S | verdict | time (s) | renders | param error | discrete exact |\n"
-        "|---|---|---|---|---|---|---|---|---|\n";
-    std::vector<double> sims, times, param_errors;
+        "| # | target shader | structural rank | matched | S | verdict | time (s) | renders | param error | discrete "
+        "exact |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    std::vector<double> sims, times, param_errors, ranks;
     int identified = 0, det_total = 0, det_exact = 0, good = 0, approximate = 0;
     std::vector<Image> tiles;
     std::vector<std::string> labels;
@@ -135,6 +142,16 @@ int main(int argc, char** argv) {
       const auto r = search::match(target, store, options);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const bool hit = r.spec.shader == decl.name;
+      // Rank of the target's shader among the screened candidates by structure (1 = first); past
+      // the candidates when it was cut.
+      auto by_structure = r.candidates;
+      std::sort(by_structure.begin(), by_structure.end(),
+                [](const auto& a, const auto& b) { return a.best_full > b.best_full; });
+      const auto found = std::find_if(by_structure.begin(), by_structure.end(),
+                                      [&](const auto& c) { return c.shader == decl.name; });
+      const std::string rank = found == by_structure.end() ? fmt::format(">{}", by_structure.size())
+                                                           : std::to_string(found - by_structure.begin() + 1);
+      ranks.push_back(found == by_structure.end() ? 1e9 : double(found - by_structure.begin() + 1));
       identified += hit;
       good += r.verdict == "good";
       approximate += r.verdict == "approximate";
@@ -160,10 +177,15 @@ int main(int argc, char** argv) {
           exact = "no";
         }
       }
-      table += fmt::format("| {} | {} | {} | {:.3f} | {} | {:.1f} | {} | {} | {} |\n", i + 1, decl.name, r.spec.shader,
+      table += fmt::format("| {} | {} | {} | {} | {:.3f} | {} | {:.1f} | {} | {} | {} |\n", i + 1, decl.name, rank, r.spec.shader,
                            r.similarity, r.verdict, secs, r.evaluations, err, exact);
-      std::fprintf(stderr, "%2d/%d %-14s -> %-14s S=%.3f %-11s %.1f s\n", i + 1, targets, decl.name.c_str(),
-                   r.spec.shader.c_str(), r.similarity, r.verdict.c_str(), secs);
+      std::fprintf(stderr, "%2d/%d %-14s (rank %s) -> %-14s S=%.3f %-11s %.1f s\n", i + 1, targets, decl.name.c_str(),
+                   rank.c_str(), r.spec.shader.c_str(), r.similarity, r.verdict.c_str(), secs);
+      if (!pictures.empty()) {  // the whole result, to see where a miss was lost (scan, screen, race)
+        nlohmann::json j = r.to_json();
+        j["target"] = {{"spec", spec_from_packed(decl, packed, render_seed).to_json()}, {"seconds", secs}};
+        std::ofstream(fs::path(pictures) / fmt::format("{:02d}-{}.json", i + 1, decl.name)) << j.dump(1) << "\n";
+      }
       if (!pictures.empty() && tiles.size() < 64) {
         RenderSettings small;
         small.width = small.height = 128;
@@ -177,11 +199,15 @@ int main(int argc, char** argv) {
       save_image(contact_sheet(tiles, labels, 8, 128), fs::path(pictures) / "synthetic.jpg");
     const double worst = times.empty() ? NAN : *std::max_element(times.begin(), times.end());
     std::string summary = fmt::format(
-        "Synthetic recovery: {} targets, shader identified {}/{} ({:.0f}%), median S {:.3f}, verdicts good {} / "
+        "Synthetic recovery: {} targets, shader identified {}/{} ({:.0f}%), target shader among the first 1 / 5 / "
+        "12 of the structural scan {} / {} / {}, median S {:.3f}, verdicts good {} / "
         "approximate {} / no-match {}; deterministic targets {}: all discrete parameters exact {}, median "
         "parameter error {:.3f} (mean |unit difference|, identified ones); time per match median {:.1f} s, worst "
         "{:.1f} s.\n\n",
-        targets, identified, targets, 100.0 * identified / std::max(1, targets), median(sims), good, approximate,
+        targets, identified, targets, 100.0 * identified / std::max(1, targets),
+        std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 1; }),
+        std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 5; }),
+        std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 12; }), median(sims), good, approximate,
         targets - good - approximate, det_total, det_exact, median(param_errors), median(times), worst);
 
     std::string photo_table;

@@ -1,4 +1,5 @@
 // proctex match PHOTO: the shader and parameters that reproduce a photo.
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <sstream>
@@ -31,7 +32,8 @@ struct MatchCliOptions {
   std::string render;
   std::string compare;
   int size = 1024;
-  int candidates = 0;
+  int candidates = search::kDefaultCandidates;
+  int screen_resolution = 64;
   double threshold = 0.0;
   int screen = 4;
   int race = 8;
@@ -39,6 +41,13 @@ struct MatchCliOptions {
   long max_evaluations = 300;
   bool json = false;
 };
+
+// A similarity as printed next to its verdict: rounded down, so 0.4996 reads 0.499 beside
+// "approximate" instead of 0.500 (the "good" threshold).
+double shown(double similarity, int digits) {
+  const double scale = std::pow(10.0, digits);
+  return std::floor(similarity * scale) / scale;
+}
 
 std::vector<std::string> split(const std::string& text, char sep) {
   std::vector<std::string> out;
@@ -84,7 +93,7 @@ void write_compare(const std::string& path, const Image& target, const Image& ma
   const int side = std::min(512, std::max(match.width, 256));
   const Image t = resize(center_crop_square(target), side, side);
   const Image m = resize(match, side, side);
-  save_image(contact_sheet({t, m}, {"target", fmt::format("{} S={:.2f} ({})", r.spec.shader, r.similarity, r.verdict)}, 2, side),
+  save_image(contact_sheet({t, m}, {"target", fmt::format("{} S={:.2f} ({})", r.spec.shader, shown(r.similarity, 2), r.verdict)}, 2, side),
              path);
 }
 
@@ -94,6 +103,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   options.candidate_shaders = o.candidates;
   options.shader_threshold = o.threshold;
   options.screen = o.screen;
+  options.screen_resolution = o.screen_resolution;
   options.race = o.race;
   options.starts = o.starts;
   options.refine.optimizer = search::parse_optimizer(o.optimizer);
@@ -128,8 +138,8 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
     if (!o.compare.empty()) write_compare(o.compare, target, img, result);
   }
   if (o.json) return print_json(j);
-  std::printf("%s: %s (similarity %.3f, %s)\n", o.photo.c_str(), result.spec.shader.c_str(), result.similarity,
-              result.verdict.c_str());
+  std::printf("%s: %s (similarity %.3f, %s)\n", o.photo.c_str(), result.spec.shader.c_str(),
+              shown(result.similarity, 3), result.verdict.c_str());
   std::printf("spec: %s\n", result.spec.to_json().dump().c_str());
   std::string parts;
   for (const auto& [k, v] : result.per_metric) parts += fmt::format("{}{} {:.3f}", parts.empty() ? "" : ", ", k, v);
@@ -156,9 +166,10 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--db", o->db, "Catalogue (default: $PROCTEX_CATALOG or ~/.cache/proctex/catalog.sqlite)");
   cmd->add_option("--crop", o->crop, "Use only this part of the photo: x,y,w,h (default: the whole photo, centre square)");
   cmd->add_option("--shaders", o->shaders, "Only these shaders, comma-separated (your knowledge of the material)");
-  cmd->add_option("--candidates", o->candidates, "Shaders kept after the pruned-graph ranking (0: all; the scan takes milliseconds)")->capture_default_str()->check(CLI::Range(0, 100000));
+  cmd->add_option("--candidates", o->candidates, "Shaders screened: the best M by their best catalogue sample's structure (0: all, slower)")->capture_default_str()->check(CLI::Range(0, 100000));
   cmd->add_option("--screen", o->screen, "Best catalogue samples per shader whose colours are fitted and scored")->capture_default_str()->check(CLI::Range(1, 1000));
-  cmd->add_option("--threshold", o->threshold, "Also keep every shader whose pruned best similarity reaches this")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--screen-resolution", o->screen_resolution, "Resolution of the screening renders (smaller is faster but loses thin structure)")->capture_default_str()->check(CLI::Range(64, 1024));
+  cmd->add_option("--threshold", o->threshold, "Also screen every shader whose best catalogue sample's structural similarity reaches this")->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--race", o->race, "Starting points given a short refinement")->capture_default_str()->check(CLI::Range(1, 256));
   cmd->add_option("--starts", o->starts, "Best of those refined to the end")->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--optimizer", o->optimizer, "neldermead, subplex, bobyqa, global or gradient")->capture_default_str();

@@ -456,10 +456,7 @@ float linear_to_srgb(float v) {
 
 std::vector<float> luminance(const Image& image) {
   std::vector<float> out(size_t(std::max(image.width, 0)) * std::max(image.height, 0));
-  for (size_t i = 0; i < out.size(); ++i) {
-    const float* p = image.pixels.data() + 3 * i;
-    out[i] = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
-  }
+  for (size_t i = 0; i < out.size(); ++i) out[i] = luminance(image.pixels.data() + 3 * i);
   return out;
 }
 

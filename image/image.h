@@ -48,7 +48,8 @@ Image resize(const Image& image, int w, int h);
 
 float srgb_to_linear(float v);
 float linear_to_srgb(float v);
-// Rec. 709 luminance of linear RGB, one float per pixel.
+// Rec. 709 luminance of one linear RGB pixel, and of every pixel of an image.
+inline float luminance(const float* rgb) { return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2]; }
 std::vector<float> luminance(const Image& image);
 
 // Grid of images with a text label under each (used by the demo, galleries, catalogue sheets).

@@ -17,8 +17,6 @@ namespace {
 // in the linear range.
 constexpr float kBasisLevel = 0.25f;
 
-float luminance(const float* rgb) { return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2]; }
-
 // Free colour parameters: searchable and not pinned by --fix.
 std::vector<const ParamDecl*> free_colours(const ShaderDecl& decl, const std::vector<std::string>& pinned) {
   std::vector<const ParamDecl*> out;

@@ -20,11 +20,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Resolution of the screening stage (colour fit and whole-metric score of the best catalogue
-// samples of every candidate shader): the smallest the metrics accept, so screening all shaders
-// costs well under a second.
-constexpr int kScreenResolution = 64;
-
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 struct Start {
@@ -108,26 +103,48 @@ std::vector<catalog::ShaderSummary> usable_shaders(catalog::Store& store, const 
     out.push_back(std::move(s));
   }
   if (out.empty()) throw Error("no shader of the catalogue is in the shader library", "rebuild the catalogue");
+  for (const auto& [name, value] : o.fixed) {
+    const bool known = std::any_of(out.begin(), out.end(), [&](const auto& s) {
+      return ShaderLibrary::builtin().get(s.name).find(name) != nullptr;
+    });
+    if (!known)
+      throw UsageError("--fix " + name + ": no shader in the search has a parameter '" + name + "'",
+                       "see the parameters with: proctex shaders SHADER");
+  }
   return out;
 }
 
-// At most `per_shader` starts from one shader, so one shader's many near-duplicate samples do not
-// crowd out a second plausible shader; among near-equal similarities smoother samples go first
-// (thesis 4.4: faster and better refinement).
-std::vector<Start> choose_starts(std::vector<Start> all, int k) {
-  std::sort(all.begin(), all.end(), [](const Start& a, const Start& b) {
+// The starting points given a short refinement (the race). Half of the lanes go to the best
+// screened start of each of the structurally closest shaders (`by_structure`, best first): the
+// structural scan uses full-resolution features and ranks the target's shader first more often
+// than the 64 px screening does (docs/match-evaluation.md), while screening sees colour. The rest
+// go to the best screened starts overall. At most `lanes / 4` (at least 1) starts per shader, so
+// one shader's near-duplicate samples do not crowd out a second plausible shader; among
+// near-equal similarities smoother samples go first (thesis 4.4: faster, better refinement).
+std::vector<Start> choose_race(std::vector<Start> screened, const std::vector<std::string>& by_structure, int lanes) {
+  std::stable_sort(screened.begin(), screened.end(), [](const Start& a, const Start& b) {
     if (std::fabs(a.similarity - b.similarity) > 0.01) return a.similarity > b.similarity;
     return a.sample->smoothness < b.sample->smoothness;
   });
-  const int per_shader = k >= 3 ? (k + 1) / 2 : k;
+  const int per_shader = std::max(1, lanes / 4);
   std::map<std::string, int> used;
+  std::vector<bool> taken(screened.size(), false);
   std::vector<Start> out;
-  for (auto& s : all) {
-    if (static_cast<int>(out.size()) >= k) break;
-    if (used[s.shader] >= per_shader) continue;
-    ++used[s.shader];
-    out.push_back(std::move(s));
+  auto take = [&](size_t i) {
+    taken[i] = true;
+    ++used[screened[i].shader];
+    out.push_back(screened[i]);
+  };
+  for (const auto& shader : by_structure) {
+    if (static_cast<int>(out.size()) >= lanes / 2) break;
+    for (size_t i = 0; i < screened.size(); ++i)
+      if (screened[i].shader == shader) {
+        take(i);
+        break;
+      }
   }
+  for (size_t i = 0; i < screened.size() && static_cast<int>(out.size()) < lanes; ++i)
+    if (!taken[i] && used[screened[i].shader] < per_shader) take(i);
   return out;
 }
 
@@ -198,10 +215,11 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   result.timings["target"] = seconds_since(t_start);
 
   // 2. Global search. Every sample of every shader is scored by structure (colour left out:
-  // the samples' colours are random); shaders are ranked by their pruned graph's best, the top-M
-  // (all by default: the scan costs milliseconds) and those above the threshold stay; the best
-  // `screen` samples of each candidate get their colours fitted and are scored with the whole
-  // metric at the screening resolution; the best of those become the starting points.
+  // the samples' colours are random); shaders are ranked by their best sample, the top-M and
+  // those above the threshold stay; the best `screen` samples of each candidate get their colours
+  // fitted and are scored with the whole metric at the screening resolution; the best of those
+  // become the starting points. The cut by structure matters: screening at 64 px blurs thin
+  // structure (mortar joints), and with every shader screened grass outscored bricks there.
   report("global");
   const auto t_global = Clock::now();
   Renderer renderer(library);
@@ -217,15 +235,17 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   }
   std::vector<int> order(scans.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_pruned > scans[b].best_pruned; });
+  // Ranked by the best sample of the whole catalogue, not of the pruned graph: the scan is free
+  // and the pruned graph can miss the one sample that has the target's scale or orientation.
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_full > scans[b].best_full; });
   std::vector<int> chosen;
   for (size_t r = 0; r < order.size(); ++r) {
     const bool by_rank = o.candidate_shaders <= 0 || static_cast<int>(r) < o.candidate_shaders || !o.shaders.empty();
-    const bool by_threshold = o.shader_threshold > 0 && scans[order[r]].best_pruned >= o.shader_threshold;
+    const bool by_threshold = o.shader_threshold > 0 && scans[order[r]].best_full >= o.shader_threshold;
     if (by_rank || by_threshold) chosen.push_back(order[r]);
   }
-  const ColourTarget colour_target = make_colour_target(target, kScreenResolution);
-  const metrics::Features target_screen = metric.features(colour_target.rgb, kScreenResolution);
+  const ColourTarget colour_target = make_colour_target(target, o.screen_resolution);
+  const metrics::Features target_screen = metric.features(colour_target.rgb, o.screen_resolution);
   std::vector<Start> screened;
   long evaluations = 0;
   for (int c : chosen) {
@@ -247,7 +267,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     const auto fits = fit_colours(decl, packs, seeds, pinned, colour_target, renderer, false);
     evaluations += colour_fit_renders(decl, pinned, keep);
     for (size_t i = 0; i < keep; ++i) {
-      const double s = metric.similarity(target_screen, metric.features(fits[i].preview, kScreenResolution));
+      const double s = metric.similarity(target_screen, metric.features(fits[i].preview, o.screen_resolution));
       screened.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]], fits[i].packed});
     }
   }
@@ -259,13 +279,12 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   }
   std::sort(result.candidates.begin(), result.candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.screened > b.screened; });
-  const auto starts = choose_starts(screened, std::max(1, o.starts));
   result.timings["global"] = seconds_since(t_global);
 
   // 3. Local refinement at the coarse resolution, as a race: the top `race` starts (colours
   // polished first) get a short refinement each, then the best `starts` of them continue with the
-  // rest of their evaluations. Screening at 64 px cannot tell bricks from pavers reliably; a short
-  // run at 128 px can, for a fraction of the renders of refining them all.
+  // rest of their evaluations: a short run tells near neighbours apart (bricks from pavers) for a
+  // fraction of the renders of refining them all.
   const auto t_local = Clock::now();
   struct Lane {
     Start start;
@@ -277,7 +296,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   };
   const int race = std::max(o.starts, o.race);
   std::vector<Lane> lanes;
-  for (auto& st : choose_starts(screened, race)) {
+  std::vector<std::string> by_structure;
+  for (int c : chosen) by_structure.push_back(scans[c].catalogue.shader);  // `chosen` is in structural order
+  for (auto& st : choose_race(screened, by_structure, race)) {
     Lane lane;
     lane.decl = &library.get(st.shader);
     std::vector<std::string> pinned;

@@ -1,9 +1,11 @@
 #pragma once
 // proctex match: a photo in, a shader and its parameters out (thesis sections 4.3-4.6).
 //   1. target: crop, analysis features computed once (full and coarse resolution);
-//   2. global search: every shader's pruned graph ranks the shaders (top-M and/or a threshold, or
-//      the user's --shaders), then the candidates' full catalogues are scanned exhaustively and the
-//      top-k samples become starting points, ordered by similarity, ties by local smoothness H;
+//   2. global search: every sample of every shader is scored by structure (catalogue features at
+//      the full resolution); the shaders are ranked by their best sample (top-M and/or a
+//      threshold, or the user's --shaders); the best samples of each candidate get their colours
+//      fitted and are screened with the whole metric; the best become starting points, ordered by
+//      similarity, ties by local smoothness H;
 //   3. local refinement with NLopt from each start at the coarse resolution (coarse-to-fine), the
 //      final candidates re-scored at the full resolution;
 //   4. a verdict from documented thresholds (a large residual flags a failed match).
@@ -33,11 +35,16 @@ inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unr
 
 std::string verdict_for(double similarity);
 
+// Candidate shaders screened by default: the structural scan of the catalogue (full-resolution
+// features, no rendering) puts the right shader among its first few; screening costs renders.
+inline constexpr int kDefaultCandidates = 12;
+
 struct MatchOptions {
   std::vector<std::string> shaders;   // restrict the search to these (empty: whole catalogue)
-  int candidate_shaders = 0;          // top-M shaders by their pruned graph (0: all)
-  double shader_threshold = 0.0;      // also every shader whose pruned best reaches this
+  int candidate_shaders = kDefaultCandidates;  // top-M shaders by their best catalogue sample (0: all)
+  double shader_threshold = 0.0;      // also every shader whose best catalogue sample reaches this
   int screen = 4;                     // best catalogue samples per candidate shader screened
+  int screen_resolution = 64;         // analysis resolution of the screening (the race tells near ones apart)
   int race = 8;                       // starts given a short refinement (about 1/5 of the evaluations)
   int starts = 3;                     // of those, the best k are refined to the end
   int resolution = 256;               // analysis resolution of the result (catalogue features)

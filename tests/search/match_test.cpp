@@ -192,6 +192,23 @@ TEST(Match, FourPointedStarIsAStarWithExactlyFourPoints) {
   EXPECT_EQ(r.verdict, "good") << describe(r);
 }
 
+// --candidates M screens only the M shaders whose best catalogue sample is structurally closest
+// (a scan of stored features, no rendering); the match comes from one of them. A bricks target
+// keeps bricks among 2 of the 7 shaders (the others: shapes, checker, clouds, stripes).
+TEST(Match, OnlyTheStructurallyClosestShadersAreScreened) {
+  const Image target = render("bricks:rows=8,ratio=2.5,seed=9005");
+  MatchOptions o = quick();
+  o.candidate_shaders = 2;
+  const MatchResult r = match_image(target, o);
+  ASSERT_EQ(r.candidates.size(), 2u) << describe(r);
+  const auto kept = [&](const std::string& name) {
+    return std::any_of(r.candidates.begin(), r.candidates.end(), [&](const auto& c) { return c.shader == name; });
+  };
+  EXPECT_TRUE(kept("bricks")) << describe(r);
+  EXPECT_TRUE(kept(r.spec.shader)) << describe(r);
+  for (const auto& start : r.starts) EXPECT_TRUE(kept(start["shader"])) << describe(r);
+}
+
 // The reported similarity is the similarity of the returned spec's render to the target: rendering
 // the spec again and comparing gives the same number (the spec is complete, seed included).
 TEST(Match, ReportedSimilarityIsReproducibleFromTheSpec) {
@@ -328,6 +345,12 @@ TEST_F(MatchCli, FixPinsParametersInTheResult) {
 TEST_F(MatchCli, FixWithAnOutOfRangeValueIsAUsageError) {
   const std::string t = target("bricks:seed=9013");
   expect_clean_error(run(t + " --db '" + db() + "' --shaders bricks --fix rows=1000" + outputs), "rows");
+}
+
+TEST_F(MatchCli, FixOfAParameterNoShaderHasIsAUsageError) {
+  // A typo must not be ignored silently: the user believes the parameter is pinned.
+  const std::string t = target("bricks:seed=9015");
+  expect_clean_error(run(t + " --db '" + db() + "' --fix rowz=5" + outputs), "rowz");
 }
 
 TEST_F(MatchCli, EvaluationBudgetStopsEarlyWithTheBestSoFar) {
