@@ -1,7 +1,8 @@
 #pragma once
 // Local refinement with NLopt (thesis section 4.4): from a starting point, maximise similarity in
-// the bounded unit parameter space; restart from the terminal point while it still improves; then
-// polish discrete parameters by trying their neighbouring whole values.
+// the bounded unit parameter space; restart from the terminal point while it still improves; try
+// the ends of continuous parameters' ranges (one more pass if that helped); then polish discrete
+// parameters by trying their neighbouring whole values.
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@ struct RefineOptions {
   int max_restarts = 3;           // restarts from the terminal point
   long max_evaluations = 400;     // renders per refinement, across restarts
   int sweep_levels = 16;          // discrete parameters with at most this many values are enumerated first
+  bool probe_bounds = true;       // after the passes, try each continuous parameter at its range's ends
 };
 
 struct RefineResult {
