@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <span>
 
 #include "core/error.h"
 #include "metrics/calibration.h"
@@ -17,6 +18,8 @@ namespace {
 // 1: product of component similarities; 2: weighted sum of group distances (grouped form).
 constexpr int kOwnVersionProduct = 1;
 constexpr int kOwnVersionGrouped = 2;
+// 3: "layout", the grouped form refitted with the shape-probe constraint.
+constexpr int kOwnVersionLayout = 3;
 }
 
 CompositeMetric::CompositeMetric(std::vector<Component> components, std::string id)
@@ -73,11 +76,14 @@ std::vector<CompositeMetric::Component> with_group_shares(std::vector<CompositeM
 }  // namespace
 
 CompositeMetric::CompositeMetric(std::vector<Component> components, std::vector<double> group_weights,
-                                 double scale, std::string id)
+                                 double scale, std::string id, double exponent, int own_version)
     : CompositeMetric(with_group_shares(std::move(components), group_weights), std::move(id)) {
   if (!(scale > 0)) throw Error("composite metric scale must be positive");
+  if (!(exponent > 0 && exponent <= 1)) throw Error("composite metric exponent must be in (0, 1]");
   group_weights_ = std::move(group_weights);
   scale_ = scale;
+  exponent_ = exponent;
+  own_version_ = own_version;
 }
 
 std::vector<CompositeMetric::Component> CompositeMetric::default_components() {
@@ -96,34 +102,49 @@ std::shared_ptr<const CompositeMetric> CompositeMetric::make_default() {
                              {std::make_shared<StructureMetric>(), kWeightStructure}});
 }
 
-std::shared_ptr<const CompositeMetric> CompositeMetric::make_grouped() {
-  std::vector<Component> components = default_components();
+namespace {
+// A grouped-form metric from a table of fitted group weights (metrics/calibration.h).
+std::shared_ptr<const CompositeMetric> from_groups(std::span<const calibration::Group> groups, double scale,
+                                                   double exponent, const std::string& id, int own_version) {
+  std::vector<CompositeMetric::Component> components = CompositeMetric::default_components();
   // Component weights (reported, and used by callers that leave colour out to rank by structure):
   // each component's sum of fitted c_g, i.e. its share of the distance of a typical same-texture
   // pair (every group contributes about c_g there, d_g being near its median m_g).
   for (auto& c : components) {
     c.weight = 0;
     for (std::size_t g = 0; g < c.metric->group_count(); ++g)
-      for (const calibration::Group& cg : calibration::kGroups)
+      for (const calibration::Group& cg : groups)
         if (c.metric->group_name(g) == cg.name) c.weight += cg.weight;
   }
-  std::vector<std::string> names;
-  for (const auto& c : components)
-    for (std::size_t g = 0; g < c.metric->group_count(); ++g) names.push_back(c.metric->group_name(g));
   std::vector<double> weights;
-  for (const std::string& name : names) {
-    double w = -1;
-    for (const calibration::Group& g : calibration::kGroups)
-      if (name == g.name) w = g.weight / g.median;
-    if (w < 0) throw Error("metrics/calibration.h has no weight for feature group " + name, "refit (bench_metrics_retrieval --fit-groups)");
-    weights.push_back(w);
-  }
-  return std::make_shared<CompositeMetric>(std::move(components), std::move(weights), calibration::kCompositeScale,
-                                           "grouped");
+  for (const auto& c : components)
+    for (std::size_t g = 0; g < c.metric->group_count(); ++g) {
+      const std::string name = c.metric->group_name(g);
+      double w = -1;
+      for (const calibration::Group& cg : groups)
+        if (name == cg.name) w = cg.weight / cg.median;
+      if (w < 0)
+        throw Error("metrics/calibration.h has no weight for feature group " + name,
+                    "refit (bench_metrics_retrieval --fit-groups)");
+      weights.push_back(w);
+    }
+  return std::make_shared<CompositeMetric>(std::move(components), std::move(weights), scale, id, exponent,
+                                           own_version);
+}
+}  // namespace
+
+std::shared_ptr<const CompositeMetric> CompositeMetric::make_layout() {
+  return from_groups(calibration::kLayoutGroups, calibration::kLayoutScale, calibration::kLayoutExponent, "layout",
+                     kOwnVersionLayout);
+}
+
+std::shared_ptr<const CompositeMetric> CompositeMetric::make_grouped() {
+  return from_groups(calibration::kGroups, calibration::kCompositeScale, calibration::kCompositeExponent, "grouped",
+                     kOwnVersionGrouped);
 }
 
 int CompositeMetric::version() const {
-  int v = 100 * (group_weights_.empty() ? kOwnVersionProduct : kOwnVersionGrouped);
+  int v = 100 * (group_weights_.empty() ? kOwnVersionProduct : own_version_);
   for (const Component& c : components_) v += c.metric->version();
   return v;
 }
@@ -173,7 +194,7 @@ double CompositeMetric::distance(std::span<const float> a, std::span<const float
     double d = 0;
     for (std::size_t k = 0; k < group_names_.size(); ++k)
       if (group_weights_[k] != 0) d += group_weights_[k] * g[k];
-    return std::pow(d, calibration::kCompositeExponent);
+    return std::pow(d, exponent_);
   }
   double d = 0;
   for (std::size_t i = 0; i < components_.size(); ++i) {

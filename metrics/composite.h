@@ -40,12 +40,16 @@ class CompositeMetric final : public Metric {
   // group_count() each), and the distance that maps to 1/e. Component weights are then only
   // reported (components(); used by callers that leave a component out, e.g. search ranking
   // starts by structure); all 0: each component's share of the group weights.
+  // d = (sum_g w_g d_g)^exponent; own_version tells fits apart (it enters version()).
   CompositeMetric(std::vector<Component> components, std::vector<double> group_weights, double scale,
-                  std::string id = "composite");
+                  std::string id = "composite", double exponent = 0.5, int own_version = 2);
   // spectrum, pyramid, colour, structure, weight 1 each.
   static std::vector<Component> default_components();
   // The default metric "composite": product form, component weights of metrics/calibration.h.
   static std::shared_ptr<const CompositeMetric> make_default();
+  // "layout": the grouped form refitted with the shape probes as a constraint (kLayoutGroups of
+  // metrics/calibration.h); not the default: the matcher still misses the 4-pointed star with it.
+  static std::shared_ptr<const CompositeMetric> make_layout();
   // "grouped": the grouped form with the group weights fitted by the retrieval evaluation
   // (metrics/calibration.h). Better retrieval than the default (docs/metrics.md) but not the
   // default yet: it matches a 4-pointed star as a circle (tests/search/match_test.cpp).
@@ -58,6 +62,8 @@ class CompositeMetric final : public Metric {
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
   double scale() const override { return scale_; }
+  // Grouped form: d = (sum_g w_g d_g)^exponent.
+  double exponent() const { return exponent_; }
   std::size_t group_count() const override { return group_names_.size(); }
   std::string group_name(std::size_t group) const override { return group_names_.at(group); }
   void group_distances(std::span<const float> a, std::span<const float> b, double* out) const override;
@@ -80,6 +86,8 @@ class CompositeMetric final : public Metric {
   std::vector<std::size_t> group_offsets_;  // first group of each component
   std::vector<double> group_weights_;
   double scale_ = 1.0;
+  double exponent_ = 0.5;
+  int own_version_ = 1;
 };
 
 }  // namespace proctex::metrics

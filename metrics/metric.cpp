@@ -61,7 +61,7 @@ struct Registry {
     auto colour = std::make_shared<ColourMetric>();
     auto structure = std::make_shared<StructureMetric>();
     metrics = {spectrum, pyramid, colour, structure, CompositeMetric::make_grouped(),
-               CompositeMetric::make_default()};
+               CompositeMetric::make_layout(), CompositeMetric::make_default()};
   }
 };
 

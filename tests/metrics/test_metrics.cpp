@@ -292,6 +292,7 @@ TEST(Metrics, MismatchedFeaturesAreRejected) {
 }
 
 TEST(Metrics, CompositeBreakdownMatchesComponents) {
+  // The default (product form): S = prod S_k^{w_k}; breakdown() gives every S_k.
   const auto& composite = dynamic_cast<const CompositeMetric&>(default_metric());
   const Image a = crop_a("brick.png"), b = crop_b("grass.png");
   Features fa = composite.features(a), fb = composite.features(b);
@@ -303,11 +304,20 @@ TEST(Metrics, CompositeBreakdownMatchesComponents) {
     EXPECT_NEAR(parts[i].second, m.similarity(m.features(a), m.features(b)), 1e-9) << parts[i].first;
     log_s += composite.components()[i].weight * std::log(parts[i].second);
   }
-  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(log_s), 1e-9);  // the default: product form
+  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(log_s), 1e-9);
+  // A grouped-form metric's breakdown reports the same component similarities.
+  const auto& def = dynamic_cast<const CompositeMetric&>(get_metric("layout"));
+  const auto parts_default = def.breakdown(def.features(a).values, def.features(b).values);
+  ASSERT_EQ(parts_default.size(), parts.size());
+  for (size_t i = 0; i < parts.size(); ++i) EXPECT_EQ(parts_default[i], parts[i]);
 }
 
-TEST(Metrics, GroupedIsAWeightedSumOfGroupDistances) {
-  const auto& composite = dynamic_cast<const CompositeMetric&>(get_metric("grouped"));
+class GroupedForm : public ::testing::TestWithParam<const char*> {};
+INSTANTIATE_TEST_SUITE_P(Metrics, GroupedForm, ::testing::Values("grouped", "layout"));
+
+// "grouped" and "layout": S = exp(-(sum_g w_g d_g)^exponent / scale).
+TEST_P(GroupedForm, IsAWeightedSumOfGroupDistances) {
+  const auto& composite = dynamic_cast<const CompositeMetric&>(get_metric(GetParam()));
   ASSERT_EQ(composite.group_weights().size(), composite.group_count());
   std::size_t groups = 0;
   for (const auto& c : composite.components()) groups += c.metric->group_count();
@@ -321,7 +331,7 @@ TEST(Metrics, GroupedIsAWeightedSumOfGroupDistances) {
     EXPECT_GE(g[k], 0.0) << composite.group_name(k);
     d += composite.group_weights()[k] * g[k];
   }
-  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(-std::sqrt(d) / composite.scale()), 1e-9);
+  EXPECT_NEAR(composite.similarity(fa, fb), std::exp(-std::pow(d, composite.exponent()) / composite.scale()), 1e-9);
   // Every group of equal features is 0.
   composite.group_distances(fa.values, fa.values, g.data());
   for (size_t k = 0; k < g.size(); ++k) EXPECT_EQ(g[k], 0.0) << composite.group_name(k);
