@@ -148,10 +148,10 @@ std::string describe(const MatchResult& r) { return r.to_json().dump(); }
 // ratio within 0.15 (range 1..6) and the joint width within 25 % (a 0.15-course joint is ~5 px at
 // 256 px and 7 courses, so 25 % is about a pixel); colours within 0.06 per linear channel.
 TEST(Match, RecoversTheParametersOfADeterministicBricksTarget) {
-  GTEST_SKIP() << "known matcher weakness (issue 6 open): the bricks target keeps rows = 7 and the "
-                  "bond but gets ratio 5.7-5.9 instead of 2.6 (measured with the grouped metric as default; "
-                  "not re-measured with the product default); the colour fit is no longer the cause "
-                  "(bricks' colours are fitted since the grey basis). Remove this skip when it works.";
+  GTEST_SKIP() << "known matcher weakness (issue 6 open): the bricks target keeps rows = 7 but ends "
+                  "in an alias - English bond with ratio 5.4 (its header courses have bricks of 2.7) "
+                  "and worn edges, S 0.66 (measured with the product default metric, 64-sample "
+                  "catalogue, 300 renders). Remove this skip when it works.";
   const Image target = render(
       "bricks:rows=7,ratio=2.6,mortar=0.15,brick=(0.45,0.16,0.08),mortar_color=(0.7,0.7,0.66),"
       "variation=0,wear=0,roughness=0,bond=running,seed=9001");
