@@ -1,7 +1,7 @@
 // Evaluation of `proctex match` (issue 6): synthetic recovery and real photos.
 //   bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR]
 //                    [--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K]
-//                    [--candidates M] [--screen-resolution R]
+//                    [--candidates M] [--screen-resolution R] [--race R]
 // Synthetic: N targets, target i from shader i mod L of the library (sorted by name) at a random
 // point of its unit parameter space (a portable random stream from --seed, so not a catalogue
 // sample) rendered at 256x256 with render seed 7000000 + i (the catalogue's render seeds are
@@ -64,7 +64,7 @@ Image side_by_side_tile(const Image& img, int side) { return resize(center_crop_
 
 int main(int argc, char** argv) {
   std::string db, photos, pictures, markdown, only;
-  int targets = 53, starts = -1, candidates = -1, screen_resolution = -1;
+  int targets = 53, starts = -1, candidates = -1, screen_resolution = -1, race = -1;
   long evaluations = -1;
   uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
                 "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
-                "[--screen-resolution R]");
+                "[--screen-resolution R] [--race R]");
       return 0;
     }
     if (i + 1 >= argc) {
@@ -90,6 +90,7 @@ int main(int argc, char** argv) {
     else if (a == "--evaluations") evaluations = std::stol(v);
     else if (a == "--starts") starts = std::stoi(v);
     else if (a == "--candidates") candidates = std::stoi(v);
+    else if (a == "--race") race = std::stoi(v);
     else if (a == "--screen-resolution") screen_resolution = std::stoi(v);
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
@@ -116,6 +117,7 @@ int main(int argc, char** argv) {
     if (evaluations > 0) options.refine.max_evaluations = evaluations;
     if (starts > 0) options.starts = starts;
     if (candidates >= 0) options.candidate_shaders = candidates;
+    if (race > 0) options.race = race;
     if (screen_resolution > 0) options.screen_resolution = screen_resolution;
     if (!pictures.empty()) fs::create_directories(pictures);
     Renderer renderer(lib);

@@ -36,7 +36,7 @@ struct MatchCliOptions {
   int screen_resolution = 64;
   double threshold = 0.0;
   int screen = 4;
-  int race = 8;
+  int race = 12;
   int starts = 3;
   long max_evaluations = 300;
   bool json = false;

@@ -45,7 +45,7 @@ struct MatchOptions {
   double shader_threshold = 0.0;      // also every shader whose best catalogue sample reaches this
   int screen = 4;                     // best catalogue samples per candidate shader screened
   int screen_resolution = 64;         // analysis resolution of the screening (the race tells near ones apart)
-  int race = 8;                       // starts given a short refinement (about 1/5 of the evaluations)
+  int race = 12;                      // starts given a short refinement (about 1/5 of the evaluations)
   int starts = 3;                     // of those, the best k are refined to the end
   int resolution = 256;               // analysis resolution of the result (catalogue features)
   int coarse_resolution = 128;        // analysis resolution during refinement
