@@ -38,7 +38,7 @@ struct MatchCliOptions {
   int screen = 4;
   int race = 12;
   int starts = 3;
-  long max_evaluations = 300;
+  long max_evaluations = search::MatchOptions{}.refine.max_evaluations;  // one default for CLI and API
   bool json = false;
 };
 

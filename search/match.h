@@ -49,7 +49,7 @@ struct MatchOptions {
   int starts = 3;                     // of those, the best k are refined to the end
   int resolution = 256;               // analysis resolution of the result (catalogue features)
   int coarse_resolution = 128;        // analysis resolution during refinement
-  RefineOptions refine;
+  RefineOptions refine{.max_evaluations = 300};  // renders per start (race lanes get 1/5)
   Budget budget;                      // whole match: the refinement stops when it is spent (the
                                       // screening always completes; it is what gives a result)
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
