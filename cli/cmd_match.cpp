@@ -20,25 +20,26 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_interrupt(int) { g_interrupted = true; }
 
+// The search defaults come from search::MatchOptions, so the CLI and the API cannot drift apart.
 struct MatchCliOptions {
   std::string photo;
   std::string db;
   std::string crop;
   std::string shaders;
-  std::string optimizer = "subplex";
+  std::string optimizer = search::to_string(search::MatchOptions{}.refine.optimizer);
   std::string budget;
   std::vector<std::string> fix;
   std::string output;
   std::string render;
   std::string compare;
   int size = 1024;
-  int candidates = search::kDefaultCandidates;
-  int screen_resolution = 64;
+  int candidates = search::MatchOptions{}.candidate_shaders;
+  int screen_resolution = search::MatchOptions{}.screen_resolution;
   double threshold = 0.0;
-  int screen = 4;
-  int race = 12;
-  int starts = 3;
-  long max_evaluations = search::MatchOptions{}.refine.max_evaluations;  // one default for CLI and API
+  int screen = search::MatchOptions{}.screen;
+  int race = search::MatchOptions{}.race;
+  int starts = search::MatchOptions{}.starts;
+  long max_evaluations = search::MatchOptions{}.refine.max_evaluations;
   bool json = false;
 };
 
