@@ -42,18 +42,14 @@ std::vector<float> PyramidMetric::compute(const Analysis& analysis) const {
   return f;
 }
 
+// Weighted mean of the per-level EMDs of group_distances (one definition of a level's distance).
 double PyramidMetric::distance(std::span<const float> a, std::span<const float> b) const {
   static constexpr double weights[kLevels] = {0.5, 1.0, 1.0, 1.0, 1.0};
+  double emd[kLevels];
+  group_distances(a, b, emd);
   double total = 0, wsum = 0;
-  const double width = 2.0 / kBins;
   for (int level = 0; level < kLevels; ++level) {
-    double ca = 0, cb = 0, emd = 0;
-    for (int k = 0; k < kBins; ++k) {
-      ca += a[level * kBins + k];
-      cb += b[level * kBins + k];
-      emd += std::abs(ca - cb) * width;
-    }
-    total += weights[level] * emd;
+    total += weights[level] * emd[level];
     wsum += weights[level];
   }
   return total / wsum;
