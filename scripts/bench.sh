@@ -13,6 +13,8 @@ export POCL_CACHE_DIR=${POCL_CACHE_DIR:-$PWD/$build/pocl-cache}
 } > "$results/machine.txt"
 cat "$results/machine.txt"
 "$build/bench/bench_render" --markdown "$results/render.md" --benchmark_min_time=0.2
+echo "== $build/bench/bench_image (PNG writing)"
+"$build/bench/bench_image"
 for b in "$build"/bench/bench_metrics*; do
   [[ -x "$b" ]] || continue
   echo "== $b"
