@@ -3,6 +3,8 @@
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <map>
+#include <string>
 
 #include "image/image.h"
 #include "shaders/renderer.h"
