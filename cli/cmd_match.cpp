@@ -170,7 +170,7 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--candidates", o->candidates, "Shaders screened: the best M by their best catalogue sample's structure (0: all, slower)")->capture_default_str()->check(CLI::Range(0, 100000));
   cmd->add_option("--screen", o->screen, "Best catalogue samples per shader whose colours are fitted and scored")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--screen-resolution", o->screen_resolution, "Resolution of the screening renders (smaller is faster but loses thin structure)")->capture_default_str()->check(CLI::Range(64, 1024));
-  cmd->add_option("--threshold", o->threshold, "Also screen every shader whose best catalogue sample's structural similarity reaches this")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--threshold", o->threshold, "Also screen every shader whose selection probability (the evidence for its material) reaches this")->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--race", o->race, "Starting points given a short refinement")->capture_default_str()->check(CLI::Range(1, 256));
   cmd->add_option("--starts", o->starts, "Best of those refined to the end")->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--optimizer", o->optimizer, "neldermead, subplex, bobyqa, global or gradient")->capture_default_str();

@@ -12,6 +12,7 @@
 #include "kernels/runtime.h"
 #include "metrics/composite.h"
 #include "search/colour_fit.h"
+#include "search/selection.h"
 #include "shaders/library.h"
 #include "shaders/parameter_space.h"
 
@@ -28,13 +29,17 @@ struct Start {
   double similarity = 0.0;            // whole metric at the screening resolution, colours fitted
   double catalogue_similarity = 0.0;  // structural, from the stored features
   std::vector<float> packed;          // the sample with fitted colours
+  double probability = 0.0;           // selection probability of the shader
 };
 
 struct ShaderScan {
   catalog::ShaderCatalogue catalogue;
   std::vector<double> similarity;  // per sample: structural similarity to the target (see below)
+  std::vector<double> selection;   // per sample: selection distance to the target (selection.h)
   double best_pruned = 0.0;
   double best_full = 0.0;
+  double best_selection = 0.0;     // smallest selection distance over the samples
+  double probability = 0.0;        // selection probability of the shader
 };
 
 std::vector<int> parse_crop(const std::string& text) {
@@ -162,8 +167,8 @@ std::vector<float> apply_fixed(const ShaderDecl& decl, const std::vector<float>&
 
 }  // namespace
 
-std::string verdict_for(double s) {
-  if (s >= kGoodMatch) return "good";
+std::string verdict_for(double s, double probability) {
+  if (s >= kGoodMatch && probability >= kGoodProbability) return "good";
   if (s >= kApproximateMatch) return "approximate";
   return "no-match";
 }
@@ -186,12 +191,16 @@ nlohmann::json MatchResult::to_json() const {
   for (const auto& [k, v] : per_metric) metrics_json[k] = v;
   nlohmann::json cands = nlohmann::json::array();
   for (const auto& c : candidates)
-    cands.push_back({{"shader", c.shader}, {"best_pruned", c.best_pruned}, {"best_full", c.best_full}, {"screened", c.screened}});
+    cands.push_back({{"shader", c.shader}, {"best_pruned", c.best_pruned}, {"best_full", c.best_full},
+                     {"screened", c.screened}, {"selection_distance", c.selection_distance},
+                     {"selection_probability", c.probability}});
   return {{"spec", spec.to_json()}, {"similarity", similarity},     {"metrics", metrics_json},
           {"verdict", verdict},      {"evaluations", evaluations}, {"stopped_early", stopped_early},
           {"candidates", cands},     {"starts", starts},           {"timings", timings},
           {"catalogue", catalogue},
-          {"thresholds", {{"good", kGoodMatch}, {"approximate", kApproximateMatch}}}};
+          {"selection_probability", probability},
+          {"selection", {{"version", default_selection().version}, {"weight", kSelectionWeight}}},
+          {"thresholds", {{"good", kGoodMatch}, {"good_probability", kGoodProbability}, {"approximate", kApproximateMatch}}}};
 }
 
 MatchResult match(const Image& target, catalog::Store& store, const MatchOptions& o,
@@ -212,6 +221,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const auto shaders = usable_shaders(store, o, metric);
   const metrics::Features target_full = metric.features(target, o.resolution);
   const metrics::Features target_coarse = metric.features(target, o.coarse_resolution);
+  const SelectionTarget selection(target, metric, o.resolution);
   result.timings["target"] = seconds_since(t_start);
 
   // 2. Global search. Every sample of every shader is scored by structure (colour left out:
@@ -227,21 +237,31 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   for (const auto& s : shaders) {
     ShaderScan scan;
     scan.catalogue = store.load(s.name, false);
-    for (const auto& sample : scan.catalogue.samples)
+    for (const auto& sample : scan.catalogue.samples) {
       scan.similarity.push_back(structural_similarity(metric, target_full, sample.features.values));
+      scan.selection.push_back(selection.distance(sample.features.values));
+    }
     for (int i : scan.catalogue.pruned) scan.best_pruned = std::max(scan.best_pruned, scan.similarity[i]);
     scan.best_full = *std::max_element(scan.similarity.begin(), scan.similarity.end());
+    scan.best_selection = *std::min_element(scan.selection.begin(), scan.selection.end());
     scans.push_back(std::move(scan));
+  }
+  {
+    std::vector<double> distances;
+    for (const auto& scan : scans) distances.push_back(scan.best_selection);
+    const auto p = selection_probabilities(distances, selection.model());
+    for (size_t i = 0; i < scans.size(); ++i) scans[i].probability = p[i];
   }
   std::vector<int> order(scans.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  // Ranked by the best sample of the whole catalogue, not of the pruned graph: the scan is free
-  // and the pruned graph can miss the one sample that has the target's scale or orientation.
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_full > scans[b].best_full; });
+  // Ranked by the selection (selection.h): the best sample of the whole catalogue, not of the
+  // pruned graph (the scan is free and the pruned graph can miss the one sample that has the
+  // target's scale or orientation), by distances weighted for material categories.
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_selection < scans[b].best_selection; });
   std::vector<int> chosen;
   for (size_t r = 0; r < order.size(); ++r) {
     const bool by_rank = o.candidate_shaders <= 0 || static_cast<int>(r) < o.candidate_shaders || !o.shaders.empty();
-    const bool by_threshold = o.shader_threshold > 0 && scans[order[r]].best_full >= o.shader_threshold;
+    const bool by_threshold = o.shader_threshold > 0 && scans[order[r]].probability >= o.shader_threshold;
     if (by_rank || by_threshold) chosen.push_back(order[r]);
   }
   const ColourTarget colour_target = make_colour_target(target, o.screen_resolution);
@@ -255,7 +275,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     for (size_t i = 0; i < best.size(); ++i) best[i] = static_cast<int>(i);
     const size_t keep = std::min<size_t>(best.size(), std::max(1, o.screen));
     std::partial_sort(best.begin(), best.begin() + keep, best.end(),
-                      [&](int a, int b) { return scan.similarity[a] > scan.similarity[b]; });
+                      [&](int a, int b) { return scan.selection[a] < scan.selection[b]; });
     std::vector<std::vector<float>> packs;
     std::vector<uint32_t> seeds;
     std::vector<std::string> pinned;
@@ -268,17 +288,19 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     evaluations += colour_fit_renders(decl, pinned, keep);
     for (size_t i = 0; i < keep; ++i) {
       const double s = metric.similarity(target_screen, metric.features(fits[i].preview, o.screen_resolution));
-      screened.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]], fits[i].packed});
+      screened.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]],
+                          fits[i].packed, scan.probability});
     }
   }
   for (int c : chosen) {
     double screen_best = 0.0;
     for (const auto& st : screened)
       if (st.shader == scans[c].catalogue.shader) screen_best = std::max(screen_best, st.similarity);
-    result.candidates.push_back({scans[c].catalogue.shader, scans[c].best_pruned, scans[c].best_full, screen_best});
+    result.candidates.push_back({scans[c].catalogue.shader, scans[c].best_pruned, scans[c].best_full, screen_best,
+                                 scans[c].best_selection, scans[c].probability});
   }
-  std::sort(result.candidates.begin(), result.candidates.end(),
-            [](const Candidate& a, const Candidate& b) { return a.screened > b.screened; });
+  // In the selection's order (`chosen` is): the ranking of the shaders by the evidence the
+  // refinement cannot game.
   result.timings["global"] = seconds_since(t_global);
 
   // 3. Local refinement at the coarse resolution, as a race: the top `race` starts (colours
@@ -354,8 +376,14 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const long short_run = std::max<long>(30, o.refine.max_evaluations / 5);
   for (size_t i = 0; i < lanes.size(); ++i)
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
-  std::stable_sort(lanes.begin(), lanes.end(),
-                   [](const Lane& a, const Lane& b) { return a.refined.similarity > b.refined.similarity; });
+  // Finalists by the similarity the race reached, weighed with the selection's probability of the
+  // shader: a flexible shader that tunes itself into a look-alike must also be a likely material.
+  auto decision = [&](double similarity, double probability) {
+    return std::log(std::max(similarity, 1e-9)) + o.selection_weight * std::log(std::max(probability, 1e-9));
+  };
+  std::stable_sort(lanes.begin(), lanes.end(), [&](const Lane& a, const Lane& b) {
+    return decision(a.refined.similarity, a.start.probability) > decision(b.refined.similarity, b.start.probability);
+  });
   const size_t finalists = std::min<size_t>(lanes.size(), std::max(1, o.starts));
   for (size_t i = 0; i < finalists; ++i)
     run_lane(lanes[i], std::max<long>(1, o.refine.max_evaluations - lanes[i].objective->evaluations()),
@@ -365,14 +393,18 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     std::vector<float> packed;
     uint32_t seed;
     double coarse;
+    double probability;
   };
   std::vector<Refined> refined;
   for (size_t i = 0; i < lanes.size(); ++i) {
     const auto& lane = lanes[i];
-    if (i < finalists) refined.push_back({lane.decl, lane.space->to_packed(lane.refined.unit), lane.start.sample->seed, lane.refined.similarity});
+    if (i < finalists)
+      refined.push_back({lane.decl, lane.space->to_packed(lane.refined.unit), lane.start.sample->seed,
+                         lane.refined.similarity, lane.start.probability});
     result.starts.push_back({{"shader", lane.start.shader},
                              {"catalogue_similarity", lane.start.catalogue_similarity},
                              {"screened_similarity", lane.start.similarity},
+                             {"selection_probability", lane.start.probability},
                              {"colours_fitted", lane.colours.fitted},
                              {"colour_similarity", {{"catalogue", lane.colours.before}, {"fitted", lane.colours.after}}},
                              {"refined_similarity_coarse", lane.refined.similarity},
@@ -384,7 +416,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // 4. Final scoring at the full resolution: the coarse optimum of each start, and its start.
   report("final");
   const auto t_final = Clock::now();
-  double best = -1.0;
+  double best = -1e300;
   RenderSettings full;
   full.width = full.height = o.resolution;
   for (size_t i = 0; i < refined.size(); ++i) {
@@ -393,8 +425,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     const metrics::Features f = metric.features(img, o.resolution);
     const double s = metric.similarity(target_full, f);
     result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
-    if (s > best) {
-      best = s;
+    if (decision(s, rf.probability) > best) {
+      best = decision(s, rf.probability);
+      result.probability = rf.probability;
       result.spec = spec_from_packed(*rf.decl, rf.packed, rf.seed);
       result.similarity = s;
       result.per_metric.clear();
@@ -404,7 +437,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     }
   }
   result.evaluations = evaluations + static_cast<long>(refined.size());
-  result.verdict = verdict_for(result.similarity);
+  result.verdict = verdict_for(result.similarity, result.probability);
   result.timings["final"] = seconds_since(t_final);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above

@@ -20,6 +20,7 @@
 
 #include "image/image.h"
 #include "search/refine.h"
+#include "search/selection_weights.h"
 #include "shaders/spec.h"
 
 namespace proctex::catalog {
@@ -32,8 +33,15 @@ namespace proctex::search {
 // score about 0.6-0.75 under it and different textures 0.1-0.25 (docs/metrics.md), so:
 inline constexpr double kGoodMatch = 0.5;         // as similar as another crop of the same texture
 inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unrelated texture
+// A similarity alone is gamed by flexible shaders (they refine into statistical look-alikes), so
+// "good" also needs the shader selection (selection.h) to find the material likely: the
+// threshold on its probability was calibrated on the labelled real photos (docs/match-evaluation.md).
+inline constexpr double kGoodProbability = selection::kGoodProbability;
+// The final choice maximises log S + kSelectionWeight * log P(shader) (fitted on the same photos).
+inline constexpr double kSelectionWeight = selection::kSelectionWeight;
 
-std::string verdict_for(double similarity);
+// "good", "approximate" or "no-match".
+std::string verdict_for(double similarity, double probability);
 
 // Candidate shaders screened by default: the structural scan of the catalogue (full-resolution
 // features, no rendering) puts the right shader among its first few; screening costs renders.
@@ -53,6 +61,7 @@ struct MatchOptions {
   Budget budget;                      // whole match: the refinement stops when it is spent (the
                                       // screening always completes; it is what gives a result)
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
+  double selection_weight = kSelectionWeight;   // lambda of the final choice (see kSelectionWeight)
 };
 
 struct Candidate {
@@ -60,11 +69,14 @@ struct Candidate {
   double best_pruned = 0.0;   // best similarity over the pruned graph
   double best_full = 0.0;     // best over the full catalogue (candidates only)
   double screened = 0.0;      // best whole-metric similarity after the colour fit (screening)
+  double selection_distance = 0.0;  // selection.h: smallest weighted distance over the samples
+  double probability = 0.0;         // selection probability of the shader (softmax over shaders)
 };
 
 struct MatchResult {
   TextureSpec spec;
   double similarity = 0.0;                  // default metric at `resolution`
+  double probability = 0.0;                 // selection probability of the matched shader
   std::map<std::string, double> per_metric;  // components of the default metric
   std::string verdict;
   long evaluations = 0;

@@ -218,7 +218,7 @@ TEST(Match, ReportedSimilarityIsReproducibleFromTheSpec) {
   const metrics::Metric& m = metrics::default_metric();
   const double again = m.similarity(m.features(target, 256), m.features(render(r.spec), 256));
   EXPECT_NEAR(again, r.similarity, 1e-6) << describe(r);
-  EXPECT_EQ(r.verdict, verdict_for(r.similarity));
+  EXPECT_EQ(r.verdict, verdict_for(r.similarity, r.probability));
 }
 
 // Targets no shader of the library can express. A verdict only means something if a failed match
@@ -307,7 +307,11 @@ TEST_F(MatchCli, JsonResultRenderAndCompare) {
   const double s = j["similarity"];
   EXPECT_GT(s, 0.0);
   EXPECT_LE(s, 1.0);
-  EXPECT_EQ(j["verdict"], s >= 0.5 ? "good" : s >= 0.25 ? "approximate" : "no-match");
+  // "good" also needs the selection to find the material likely (search/match.h).
+  const double p = j["selection_probability"];
+  EXPECT_GE(p, 0.0);
+  EXPECT_LE(p, 1.0);
+  EXPECT_EQ(j["verdict"], s >= 0.5 && p >= kGoodProbability ? "good" : s >= 0.25 ? "approximate" : "no-match");
   EXPECT_GT(j["timings"]["total"].get<double>(), 0.0);
   EXPECT_EQ(j["catalogue"]["path"], db());
   EXPECT_EQ(j["catalogue"]["shaders"].size(), kShaderCount);

@@ -1,0 +1,96 @@
+// Evidence for the shader selection (issue 12): for each labelled photo, the default metric's 20
+// group distances between the photo and every catalogue sample, at one or more scales of the photo.
+//   bench_select_dump --db CATALOG --list LIST.tsv --out DIR
+// LIST.tsv: one photo per line, "path<TAB>accepted shaders (comma-separated)<TAB>split<TAB>kind".
+// DIR/evidence.json: shaders, sample counts, group names, photos with labels and scales;
+// DIR/distances.f32: float32 little-endian, [photo][scale][sample of the catalogue in shader order][group];
+// DIR/targets.f32: float32, [photo][scale][feature] (the photo's composite features).
+// The fit of the selection weights reads these files (bench/fit_selection.py).
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "catalog/store.h"
+#include "core/error.h"
+#include "metrics/composite.h"
+#include "metrics/metric.h"
+#include "search/match.h"
+#include "search/selection.h"
+
+using namespace proctex;
+namespace fs = std::filesystem;
+
+int main(int argc, char** argv) {
+  std::string db, list, out;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--db") db = argv[i + 1];
+    else if (a == "--list") list = argv[i + 1];
+    else if (a == "--out") out = argv[i + 1];
+  }
+  if (db.empty() || list.empty() || out.empty()) {
+    std::fprintf(stderr, "usage: bench_select_dump --db CATALOG --list LIST.tsv --out DIR\n");
+    return 2;
+  }
+  try {
+    fs::create_directories(out);
+    catalog::Store store(db, catalog::Store::Access::Read);
+    const auto& metric = metrics::default_metric();
+    const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric);
+    std::vector<catalog::ShaderCatalogue> cats;
+    nlohmann::json index;
+    for (const auto& s : store.shaders()) {
+      cats.push_back(store.load(s.name, false));
+      index["shaders"].push_back({{"name", s.name}, {"samples", cats.back().samples.size()}});
+    }
+    for (size_t g = 0; g < composite->group_count(); ++g) index["groups"].push_back(composite->group_name(g));
+    std::ofstream dist(fs::path(out) / "distances.f32", std::ios::binary);
+    std::ofstream targ(fs::path(out) / "targets.f32", std::ios::binary);
+    std::ifstream in(list);
+    std::string line;
+    std::vector<double> groups(composite->group_count());
+    int n = 0;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::stringstream ls(line);
+      std::string path, accepted, split, kind;
+      std::getline(ls, path, '\t');
+      std::getline(ls, accepted, '\t');
+      std::getline(ls, split, '\t');
+      std::getline(ls, kind, '\t');
+      const Image photo = search::prepare_target(path, "");
+      const auto views = search::target_views(photo);
+      nlohmann::json entry = {{"path", path}, {"accepted", accepted}, {"split", split}, {"kind", kind},
+                              {"scales", views.size()}};
+      for (const auto& view : views) {
+        const auto f = metric.features(view.image, 256);
+        targ.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
+        entry["views"].push_back(view.name);
+        for (const auto& cat : cats)
+          for (const auto& sample : cat.samples) {
+            composite->group_distances(f.values, sample.features.values, groups.data());
+            for (double d : groups) {
+              const float v = static_cast<float>(d);
+              dist.write(reinterpret_cast<const char*>(&v), sizeof v);
+            }
+          }
+      }
+      index["photos"].push_back(entry);
+      std::fprintf(stderr, "\r%d photos", ++n);
+    }
+    index["feature_size"] = metric.feature_size();
+    std::ofstream(fs::path(out) / "evidence.json") << index.dump(1);
+    std::fprintf(stderr, "\n");
+  } catch (const Error& e) {
+    std::fprintf(stderr, "bench_select_dump: error: %s (%s)\n", e.message().c_str(), e.hint().c_str());
+    return 1;
+  }
+  return 0;
+}
