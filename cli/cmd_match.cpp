@@ -50,6 +50,23 @@ double shown(double similarity, int digits) {
   return std::floor(similarity * scale) / scale;
 }
 
+// What the user can do next, by verdict: the summary's last line.
+std::string next_step(const search::MatchResult& r, const std::string& photo) {
+  std::string others;
+  int n = 0;
+  for (const auto& c : r.candidates)
+    if (c.shader != r.spec.shader && n < 3) others += (n++ ? "," : "") + c.shader;
+  if (r.verdict == "good")
+    return fmt::format("next: render it at any size: proctex render SPEC.json -o big.png --size 4096 "
+                       "(the material is {:.0f}% likely by the selection)", 100 * r.probability);
+  if (r.verdict == "approximate")
+    return fmt::format("next: the material is uncertain ({} at {:.0f}%); compare with --compare side.png, try the "
+                       "other likely materials with --shaders {}, or crop a clean region with --crop x,y,w,h",
+                       r.spec.shader, 100 * r.probability, others.empty() ? r.spec.shader : others);
+  return "next: no shader of the library reproduces " + photo +
+         "; synthesise more of it from the photo itself (exemplar synthesis), or crop a region with one material";
+}
+
 std::vector<std::string> split(const std::string& text, char sep) {
   std::vector<std::string> out;
   std::stringstream in(text);
@@ -149,6 +166,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
               result.stopped_early ? " (stopped early: best so far)" : "");
   for (const auto* path : {&o.output, &o.render, &o.compare})
     if (!path->empty()) std::printf("wrote %s\n", path->c_str());
+  std::printf("%s\n", next_step(result, o.photo).c_str());
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "kernels/runtime.h"
 #include "metrics/composite.h"
+#include "metrics/magnitude.h"
 #include "search/colour_fit.h"
 #include "search/selection.h"
 #include "shaders/library.h"
@@ -165,6 +166,35 @@ std::vector<float> apply_fixed(const ShaderDecl& decl, const std::vector<float>&
   return resolve(decl, spec);
 }
 
+// Whether a spec renders (almost) the same image with another seed: a deterministic pattern
+// (tilings, shapes, clean bricks; a faint seed-driven grain is allowed). Mean |difference| over
+// a 64 px render, linear RGB.
+constexpr double kPatternPeakiness = 0.7;
+
+bool nearly_deterministic(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed) {
+  RenderSettings s;
+  s.width = s.height = 64;
+  const auto images = renderer.render_batch(decl, {packed, packed}, {seed, seed ^ 0x5bd1e995u}, s);
+  double diff = 0;
+  for (size_t i = 0; i < images[0].pixels.size(); ++i) diff += std::fabs(images[0].pixels[i] - images[1].pixels[i]);
+  return diff / double(images[0].pixels.size()) < 0.004;
+}
+
+// Share of the lightness spectrum's energy (DC left out) in its strongest 2% of coefficients:
+// near 1 for a clean periodic pattern or a single shape, well below for photographed or noisy
+// textures, whose spectra fall off smoothly.
+double spectral_peakiness(const metrics::Features& magnitude) {
+  const size_t plane = magnitude.values.size() / 3;
+  std::vector<double> energy;
+  for (size_t i = 1; i < plane; ++i) energy.push_back(std::pow(double(magnitude.values[i]), 4));
+  const size_t top = std::max<size_t>(1, energy.size() / 50);
+  std::partial_sort(energy.begin(), energy.begin() + top, energy.end(), std::greater<>());
+  double strong = 0, total = 0;
+  for (size_t i = 0; i < energy.size(); ++i) (i < top ? strong : total) += energy[i];
+  total += strong;
+  return total > 0 ? strong / total : 0.0;
+}
+
 }  // namespace
 
 std::string verdict_for(double s, double probability) {
@@ -199,6 +229,7 @@ nlohmann::json MatchResult::to_json() const {
           {"candidates", cands},     {"starts", starts},           {"timings", timings},
           {"catalogue", catalogue},
           {"selection_probability", probability},
+          {"polish", polish},
           {"selection", {{"version", default_selection().version}, {"weight", kSelectionWeight}}},
           {"thresholds", {{"good", kGoodMatch}, {"good_probability", kGoodProbability}, {"approximate", kApproximateMatch}}}};
 }
@@ -437,8 +468,70 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     }
   }
   result.evaluations = evaluations + static_cast<long>(refined.size());
-  result.verdict = verdict_for(result.similarity, result.probability);
   result.timings["final"] = seconds_since(t_final);
+
+  // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
+  // cannot tell 7 from 8 brick courses or a bond from its alias well; the whole Fourier magnitude
+  // can. Kept only if the default similarity agrees that it is better.
+  const auto t_polish = Clock::now();
+  if (o.polish_evaluations > 0 && !(stop && *stop) && best > -1e300) {
+    const ShaderDecl& decl = library.get(result.spec.shader);
+    std::vector<std::string> pinned;
+    const std::vector<float> packed = apply_fixed(decl, resolve(decl, result.spec), o.fixed, pinned);
+    static const metrics::MagnitudeMetric magnitude;
+    const metrics::Features target_magnitude = magnitude.features(target, o.coarse_resolution);
+    nlohmann::json polish = {{"deterministic", nearly_deterministic(renderer, decl, packed, result.spec.seed)},
+                             {"peakiness", spectral_peakiness(target_magnitude)}};
+    evaluations += 2;
+    if (polish["deterministic"] || polish["peakiness"].get<double>() >= kPatternPeakiness) {
+      const ParameterSpace space(decl, packed, pinned);
+      Objective objective(space, target_magnitude, magnitude, renderer, result.spec.seed, o.coarse_resolution);
+      if (o.budget.max_seconds > 0) objective.set_budget({0, std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6)});
+      objective.on_progress = [&](const Objective& obj) {
+        if (stop && *stop) objective.stop();
+        state.evaluations = evaluations + obj.evaluations();
+        report("polish");
+      };
+      RefineOptions options = o.refine;
+      options.max_evaluations = o.polish_evaluations;
+      const auto r = refine(objective, space.to_unit(packed), options);
+      evaluations += objective.evaluations();
+      // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form colour
+      // fit (colour_fit.h) then sets the free colours from the target's colour statistics.
+      std::vector<float> polished = space.to_packed(r.unit);
+      const auto recoloured = fit_colours(decl, {polished}, {result.spec.seed}, pinned, colour_target, renderer, true).front();
+      evaluations += colour_fit_renders(decl, pinned, 1);
+      const auto images = renderer.render_batch(decl, {polished, recoloured.packed}, {result.spec.seed, result.spec.seed}, full);
+      evaluations += 2;
+      metrics::Features f = metric.features(images[0], o.resolution);
+      double s = metric.similarity(target_full, f);
+      if (recoloured.fitted) {
+        metrics::Features f2 = metric.features(images[1], o.resolution);
+        const double s2 = metric.similarity(target_full, f2);
+        polish["recoloured_similarity"] = s2;
+        if (s2 > s) {
+          s = s2;
+          f = std::move(f2);
+          polished = recoloured.packed;
+        }
+      }
+      polish["similarity"] = s;
+      polish["kept"] = s > result.similarity;
+      polish["evaluations"] = objective.evaluations();
+      if (s > result.similarity) {
+        result.spec = spec_from_packed(decl, polished, result.spec.seed);
+        result.similarity = s;
+        result.per_metric.clear();
+        if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
+          for (const auto& [name, value] : composite->breakdown(target_full.values, f.values)) result.per_metric[name] = value;
+        result.per_metric[metric.id()] = s;
+      }
+    }
+    result.polish = polish;
+  }
+  result.timings["polish"] = seconds_since(t_polish);
+  result.evaluations = evaluations + static_cast<long>(refined.size());
+  result.verdict = verdict_for(result.similarity, result.probability);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above
   nlohmann::json names = nlohmann::json::array();

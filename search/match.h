@@ -62,6 +62,7 @@ struct MatchOptions {
                                       // screening always completes; it is what gives a result)
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
   double selection_weight = kSelectionWeight;   // lambda of the final choice (see kSelectionWeight)
+  long polish_evaluations = 240;      // exact polish of a deterministic pattern (0: off; metrics/magnitude.h)
 };
 
 struct Candidate {
@@ -85,6 +86,7 @@ struct MatchResult {
   nlohmann::json starts = nlohmann::json::array();  // each start: shader, catalogue similarity, refined
   nlohmann::json timings = nlohmann::json::object();
   nlohmann::json catalogue = nlohmann::json::object();  // path, shaders, metric id and version
+  nlohmann::json polish = nlohmann::json::object();     // the exact polish: deterministic?, kept?
 
   nlohmann::json to_json() const;
 };
