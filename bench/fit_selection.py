@@ -1,189 +1,259 @@
-#!/usr/bin/env python3
-"""Fits the shader-selection weights of `proctex match` (issue 12) on labelled real photos.
+#!/usr/bin/python3
+"""Fits the shader selection of `proctex match` (issue 12): which material is this photo?
 
     build/bench/bench_select_dump --db CAT --list LIST.tsv --out DIR
-    python3 bench/fit_selection.py DIR [--split tune] [--report report]
+    /usr/bin/python3 bench/fit_selection.py DIR --db CAT [--write search/selection_model.h]
 
-The selection distance of photo p to shader k is the smallest, over the photo's views v and the
-shader's catalogue samples i, of sum_g w_g d_g(p, v, i) / m_g, where d_g are the default metric's
-20 group distances and m_g their median over the data (so weight 1 gives each group the same say).
-The weights are fitted on the tune split (coordinate descent over a grid of weights, objective:
-mean log-loss of the accepted shaders under a softmax of -D / tau), the report split is only scored.
-Prints the weights as a C++ table for search/selection_weights.h.
+A multinomial logistic regression from the default metric's structural features (spectrum,
+pyramid and structure; colour left out: a catalogue sample's colours are random until fitted) to
+the library's shaders, trained on
+  - every catalogue sample, labelled with its shader (what each shader can look like), and
+  - the photos of the tune split, every view of each (search::target_views: the whole photo and
+    closer crops), labelled with the set of shaders a person accepts for it: the loss is
+    -log sum_{accepted} P(shader), so any accepted shader is right (weight --photo-weight);
+with an L2 penalty (--l2). Features are standardised with the catalogue's mean and deviation.
+At match time a photo's score for a shader is the largest logit over its views plus
+alpha * log(best structural similarity of the shader's catalogue samples to the photo) - the
+catalogue's nearest-sample evidence, which recognises clean renders the classifier has not seen;
+probabilities are the softmax of those scores. alpha is chosen on out-of-fold scores of the tune
+photos and on renders of another catalogue (bench_select_dump --synthetic, split "synthetic"),
+each counting half. The report split is never used for fitting: it is only scored.
+
+Calibration of "good" (search/match.h): the model is refitted on each half of the tune split
+(stratified by kind) and scores the other half; p_good is the smallest probability such that at
+least --precision of those out-of-fold top-1 choices with P >= p_good are right.
 """
 import argparse
 import json
 import os
+import sqlite3
 import sys
 
 import numpy as np
 
-
-def load(folder):
-    index = json.load(open(os.path.join(folder, "evidence.json")))
-    shaders = [s["name"] for s in index["shaders"]]
-    counts = [s["samples"] for s in index["shaders"]]
-    groups = index["groups"]
-    photos = index["photos"]
-    G, S = len(groups), sum(counts)
-    raw = np.fromfile(os.path.join(folder, "distances.f32"), dtype="<f4")
-    total_views = sum(p["scales"] for p in photos)
-    assert raw.size == total_views * S * G, (raw.size, total_views, S, G)
-    raw = raw.reshape(total_views, S, G)
-    V = max(p["scales"] for p in photos)
-    dist = np.full((len(photos), V, S, G), np.inf, dtype=np.float32)
-    at = 0
-    for i, p in enumerate(photos):
-        dist[i, : p["scales"]] = raw[at : at + p["scales"]]
-        at += p["scales"]
-    owner = np.repeat(np.arange(len(shaders)), counts)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    return index, shaders, groups, photos, dist, owner, starts
+# Feature layout of the default metric (composite v106): spectrum 30, pyramid 160, colour 36,
+# structure 191. Colour [190, 226) is left out.
+STRUCTURAL = [(0, 190), (226, 417)]
 
 
-def shader_distances(dist, w, starts, view_penalty):
-    # (P, V, S) weighted distances, smallest over views (with a per-view penalty), then per shader.
-    d = np.tensordot(dist, w, axes=([3], [0]))
-    d = d + view_penalty[None, : d.shape[1], None]
-    d = np.where(np.isfinite(d), d, np.inf).min(axis=1)
-    return np.minimum.reduceat(d, starts, axis=1)  # (P, K)
+def softmax(L):
+    L = L - L.max(axis=1, keepdims=True)
+    P = np.exp(L)
+    return P / P.sum(axis=1, keepdims=True)
 
 
-def scores(D, accepted_mask, tau):
-    logits = -D / tau
-    logits -= logits.max(axis=1, keepdims=True)
-    logp = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
-    acc_logp = np.log((np.exp(logp) * accepted_mask).sum(axis=1) + 1e-12)
-    top1 = accepted_mask[np.arange(len(D)), D.argmin(axis=1)]
-    order = np.argsort(D, axis=1)[:, :3]
-    top3 = np.array([accepted_mask[i, order[i]].any() for i in range(len(D))])
-    return -acc_logp.mean(), top1.mean(), top3.mean()
+class Data:
+    def __init__(self, folder, db):
+        con = sqlite3.connect(db)
+        meta = con.execute("select distinct metric, metric_version, resolution from shaders").fetchall()
+        if len(meta) != 1:
+            sys.exit("catalogue mixes metric versions: %s" % meta)
+        self.metric, self.metric_version, self.resolution = meta[0]
+        rows = con.execute("select s.name, f.vector from features f join shaders s on s.id = f.shader_id "
+                           "order by s.name, f.idx").fetchall()
+        self.names = sorted({r[0] for r in rows})
+        X = np.array([np.frombuffer(r[1], dtype="<f4") for r in rows], dtype=np.float64)
+        self.y = np.array([self.names.index(r[0]) for r in rows])
+        index = json.load(open(os.path.join(folder, "evidence.json")))
+        F = index["feature_size"]
+        if X.shape[1] != F:
+            sys.exit("catalogue features have %d values, the dump %d" % (X.shape[1], F))
+        self.use = np.zeros(F, dtype=bool)
+        for a, b in STRUCTURAL:
+            self.use[a:b] = True
+        T = np.fromfile(os.path.join(folder, "targets.f32"), dtype="<f4").reshape(-1, F).astype(np.float64)
+        Xs = X[:, self.use]
+        self.mean = Xs.mean(axis=0)
+        self.scale = Xs.std(axis=0) + 1e-6
+        self.Z = (Xs - self.mean) / self.scale
+        self.TZ = (T[:, self.use] - self.mean) / self.scale
+        self.photos = index["photos"]
+        self.views = []
+        at = 0
+        for p in self.photos:
+            self.views.append(list(range(at, at + p["scales"])))
+            at += p["scales"]
+        self.S = np.fromfile(os.path.join(folder, "structural.f32"), dtype="<f4").reshape(
+            len(self.photos), len(self.names)).astype(np.float64)
+        self.alpha = 0.0
+        self.A = np.zeros((len(self.photos), len(self.names)))
+        for i, p in enumerate(self.photos):
+            for s in p["accepted"].split(","):
+                if s in self.names:
+                    self.A[i, self.names.index(s)] = 1
+
+    def ids(self, split):
+        return sorted([i for i, p in enumerate(self.photos) if p["split"] == split],
+                      key=lambda i: (self.photos[i]["kind"], self.photos[i]["path"]))
+
+    def train(self, photo_ids, l2, photo_weight, iterations=600, rate=0.5):
+        n, d = self.Z.shape
+        K = len(self.names)
+        Y = np.eye(K)[self.y]
+        PR = np.array([self.TZ[v] for i in photo_ids for v in self.views[i]]).reshape(-1, d)
+        PA = np.array([self.A[i] for i in photo_ids for v in self.views[i]]).reshape(-1, K)
+        W = np.zeros((d, K))
+        b = np.zeros(K)
+        for _ in range(iterations):
+            G = (softmax(self.Z @ W + b) - Y) / n
+            gW, gb = self.Z.T @ G, G.sum(axis=0)
+            if len(PR) and photo_weight > 0:
+                Q = softmax(PR @ W + b)
+                target = Q * PA
+                target /= target.sum(axis=1, keepdims=True) + 1e-12
+                Gp = (Q - target) * photo_weight / len(PR)
+                gW += PR.T @ Gp
+                gb += Gp.sum(axis=0)
+            W -= rate * (gW + l2 * W)
+            b -= rate * gb
+        return W, b
+
+    def probabilities(self, W, b, i):
+        scores = (self.TZ[self.views[i]] @ W + b).max(axis=0) + self.alpha * np.log(np.maximum(self.S[i], 1e-6))
+        return softmax(scores[None, :])[0]
 
 
-SELECTION_WEIGHT = 0.5
-GOOD_PROBABILITY = 0.5
+def score(data, W, b, ids):
+    top1 = top3 = 0
+    for i in ids:
+        order = np.argsort(-data.probabilities(W, b, i))
+        top1 += data.A[i, order[0]] > 0
+        top3 += data.A[i, order[:3]].any()
+    n = max(1, len(ids))
+    return top1 / n, top3 / n
 
 
-def write_header(path, version, groups, med, w, pen, tau, tune, rep, argv):
+def out_of_fold(data, ids, l2, photo_weight):
+    """Models fitted on each half of `ids` (alternate items by kind), each with the other half."""
+    folds = []
+    for fold in (0, 1):
+        train = [i for k, i in enumerate(ids) if k % 2 != fold]
+        test = [i for k, i in enumerate(ids) if k % 2 == fold]
+        folds.append((data.train(train, l2, photo_weight), test))
+    return folds
+
+
+def choose_alpha(data, folds, synthetic_model, synthetic):
+    best = None
+    for alpha in [0, 0.5, 1, 2, 3, 4, 6, 8, 12]:
+        data.alpha = alpha
+        photo = np.mean([data.A[i, int(np.argmax(data.probabilities(W, b, i)))] > 0 for (W, b), test in folds for i in test])
+        W, b = synthetic_model
+        synth = np.mean([data.A[i, int(np.argmax(data.probabilities(W, b, i)))] > 0 for i in synthetic]) if synthetic else 0
+        print("alpha %-4g out-of-fold tune top-1 %.3f, synthetic top-1 %.3f" % (alpha, photo, synth))
+        if best is None or 0.5 * (photo + synth) > best[0] + 1e-9:
+            best = (0.5 * (photo + synth), alpha)
+    data.alpha = best[1]
+    return best[1]
+
+
+def calibrate(data, folds, precision):
+    """p_good from the out-of-fold top-1 probabilities and rightness."""
+    out = []
+    for (W, b), test in folds:
+        for i in test:
+            p = data.probabilities(W, b, i)
+            k = int(np.argmax(p))
+            out.append((p[k], data.A[i, k] > 0))
+    out.sort(reverse=True)
+    p_good = 1.0
+    for p, _ in sorted(out):
+        kept = [ok for q, ok in out if q >= p]
+        if kept and sum(kept) / len(kept) >= precision:
+            p_good = p
+            break
+    kept = [ok for q, ok in out if q >= p_good]
+    return p_good, out, (sum(kept), len(kept))
+
+
+def write_header(path, data, W, b, version, p_good, argv, report):
+    def array(values, per_line=8):
+        vals = ["%.7g" % v for v in values]
+        return ",\n".join("    " + ", ".join(vals[i:i + per_line]) for i in range(0, len(vals), per_line))
+
+    ranges = ", ".join("{%d, %d}" % r for r in STRUCTURAL)
     lines = [
         "#pragma once",
-        "// Written by bench/fit_selection.py (do not edit by hand): the shader-selection model of",
-        "// search/selection.h, fitted on the tune split of the labelled real photos (bench/realset).",
-        "// Command: " + " ".join(["fit_selection.py"] + argv[1:]),
-        "// Tune split: log-loss %.3f, top-1 %.3f, top-3 %.3f." % tune,
-    ]
-    if rep is not None:
-        lines.append("// Report split: log-loss %.3f, top-1 %.3f, top-3 %.3f." % rep)
-    lines += [
-        "namespace proctex::search::selection {",
+        "// Written by bench/fit_selection.py - do not edit by hand. The shader selection model of",
+        "// search/selection.h: a multinomial logistic regression from the default metric's structural",
+        "// features to the library's shaders, fitted on the catalogue's samples and the tune split of",
+        "// the labelled real photos (bench/realset). " + report,
+        "// Command: fit_selection.py " + " ".join(argv[1:]),
+        "#include <cstddef>",
+        "",
+        "namespace proctex::search::selection_model {",
         "",
         "inline constexpr int kVersion = %d;" % version,
-        "struct Group {",
-        "  const char* name;",
-        "  double median;  // median distance of the group between a labelled photo and a catalogue sample",
-        "  double weight;",
-        "};",
-        "inline constexpr Group kGroups[] = {",
+        'inline constexpr const char* kMetric = "%s";' % data.metric,
+        "inline constexpr int kMetricVersion = %d;" % data.metric_version,
+        "inline constexpr int kResolution = %d;" % data.resolution,
+        "// Feature index ranges [begin, end) used, in order.",
+        "inline constexpr std::size_t kRanges[][2] = {%s};" % ranges,
+        "inline constexpr std::size_t kFeatures = %d;" % W.shape[0],
+        "inline constexpr std::size_t kShaders = %d;" % W.shape[1],
+        "inline constexpr const char* kShaderNames[kShaders] = {",
+        "    " + ", ".join('"%s"' % n for n in data.names) + "};",
+        "// Standardisation: z = (x - kMean) / kScale.",
+        "inline constexpr float kMean[kFeatures] = {", array(data.mean), "};",
+        "inline constexpr float kScale[kFeatures] = {", array(data.scale), "};",
+        "// Logit of shader k = sum_f z_f kWeights[f * kShaders + k] + kBias[k].",
+        "inline constexpr float kWeights[kFeatures * kShaders] = {", array(W.reshape(-1)), "};",
+        "inline constexpr float kBias[kShaders] = {", array(b), "};",
+        "// Score of shader k = its largest logit over the views + kStructuralWeight * log(best",
+        "// structural similarity of its catalogue samples to the whole photo).",
+        "inline constexpr double kStructuralWeight = %g;" % data.alpha,
+        "// \"good\" needs the matched shader's selection probability to reach this (out-of-fold",
+        "// calibration on the tune split for the precision given to the fit).",
+        "inline constexpr double kGoodProbability = %.4f;" % p_good,
+        "",
+        "}  // namespace proctex::search::selection_model",
+        "",
     ]
-    for g, name in enumerate(groups):
-        lines.append('    {"%s", %.6g, %g},' % (name, med[g], w[g]))
-    lines += ["};",
-              "// Added to the distance of each view of search::target_views (whole, half, quarter).",
-              "inline constexpr double kViewPenalty[] = {%s};" % ", ".join("%g" % p for p in pen),
-              "inline constexpr double kTemperature = %g;" % tau,
-              "// The match's final choice maximises log S + kSelectionWeight log P; \"good\" needs P >= kGoodProbability",
-              "// (both calibrated on the tune split by bench/calibrate_verdict.py from match results).",
-              "inline constexpr double kSelectionWeight = %g;" % SELECTION_WEIGHT,
-              "inline constexpr double kGoodProbability = %g;" % GOOD_PROBABILITY,
-              "",
-              "}  // namespace proctex::search::selection", ""]
     open(path, "w").write("\n".join(lines))
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("folder")
-    ap.add_argument("--split", default="tune")
-    ap.add_argument("--report", default="report")
-    ap.add_argument("--passes", type=int, default=6)
-    ap.add_argument("--groups", default="", help="comma-separated group names allowed non-zero weights")
-    ap.add_argument("--write", default="", help="write the fitted model as search/selection_weights.h")
-    ap.add_argument("--version", type=int, default=1, help="model version written with --write")
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("folder", help="bench_select_dump output")
+    ap.add_argument("--db", required=True, help="the catalogue the dump was made with")
+    ap.add_argument("--l2", type=float, default=0.05)
+    ap.add_argument("--photo-weight", type=float, default=0.5)
+    ap.add_argument("--precision", type=float, default=0.95, help="wanted precision of 'good'")
+    ap.add_argument("--version", type=int, default=1)
+    ap.add_argument("--alpha", type=float, default=None, help="structural weight (default: chosen, see above)")
+    ap.add_argument("--write", default="", help="write the model as a C++ header")
     args = ap.parse_args()
-    index, shaders, groups, photos, dist, owner, starts = load(args.folder)
-    G = len(groups)
-    finite = dist[np.isfinite(dist)].reshape(-1, G) if False else None
-    med = np.array([np.median(dist[..., g][np.isfinite(dist[..., g])]) for g in range(G)])
-    dist = dist / med[None, None, None, :]
-    accepted = np.zeros((len(photos), len(shaders)), dtype=bool)
-    for i, p in enumerate(photos):
-        for name in p["accepted"].split(","):
-            if name in shaders:
-                accepted[i, shaders.index(name)] = True
-    split = np.array([p["split"] for p in photos])
-    tune = split == args.split
-    rep = split == args.report
-    allowed = [g for g in range(G) if not args.groups or groups[g] in args.groups.split(",")]
-    w = np.zeros(G)
-    for g in allowed:
-        if not groups[g].startswith("colour"):
-            w[g] = 1.0
-    V = dist.shape[1]
-    pen = np.zeros(V)
-    tau = 1.0
-
-    def objective(w, pen, tau, mask):
-        D = shader_distances(dist[mask], w, starts, pen)
-        return scores(D, accepted[mask], tau)
-
-    base = objective(w, pen, tau, tune)
-    print("start: tune loss %.3f top1 %.3f top3 %.3f" % base)
-    grid = [0, 0.125, 0.25, 0.5, 1, 2, 4, 8]
-    for it in range(args.passes):
-        changed = False
-        for g in allowed:
-            best = (objective(w, pen, tau, tune)[0], w[g])
-            for v in grid:
-                w2 = w.copy()
-                w2[g] = v
-                if w2.sum() <= 0:
-                    continue
-                l = objective(w2, pen, tau, tune)[0]
-                if l < best[0] - 1e-6:
-                    best = (l, v)
-            if best[1] != w[g]:
-                w[g] = best[1]
-                changed = True
-        for v in range(1, V):
-            for p in [0, 0.5, 1, 2, 4, 1e9]:
-                pen2 = pen.copy()
-                pen2[v] = p
-                if objective(w, pen2, tau, tune)[0] < objective(w, pen, tau, tune)[0] - 1e-6:
-                    pen = pen2
-                    changed = True
-        for t in [0.25, 0.5, 1, 2, 4, 8, 16]:
-            if objective(w, pen, t, tune)[0] < objective(w, pen, tau, tune)[0] - 1e-6:
-                tau = t
-                changed = True
-        r = objective(w, pen, tau, tune)
-        print("pass %d: tune loss %.3f top1 %.3f top3 %.3f tau %g" % (it + 1, *r, tau))
-        if not changed:
-            break
-    print("tune   : loss %.3f top1 %.3f top3 %.3f" % objective(w, pen, tau, tune))
-    if rep.any():
-        print("report : loss %.3f top1 %.3f top3 %.3f" % objective(w, pen, tau, rep))
-    print("view penalties:", pen.tolist(), "tau", tau)
-    for g in range(G):
-        print('    {"%s", %.6g, %g},' % (groups[g], med[g], w[g]))
+    data = Data(args.folder, args.db)
+    tune, report, synthetic = data.ids("tune"), data.ids("report"), data.ids("synthetic")
+    W, b = data.train(tune, args.l2, args.photo_weight)
+    folds = out_of_fold(data, tune, args.l2, args.photo_weight)
+    alpha = choose_alpha(data, folds, (W, b), synthetic) if args.alpha is None else args.alpha
+    data.alpha = alpha
+    print("chosen alpha", alpha)
+    t1, t3 = score(data, W, b, tune)
+    r1, r3 = score(data, W, b, report)
+    print("tune   (%d photos, fitted on): top-1 %.3f top-3 %.3f" % (len(tune), t1, t3))
+    print("report (%d photos, held out) : top-1 %.3f top-3 %.3f" % (len(report), r1, r3))
+    p_good, oof, (right, kept) = calibrate(data, folds, args.precision)
+    if synthetic:
+        print("synthetic (%d renders of another catalogue): top-1 %.3f top-3 %.3f" % ((len(synthetic),) + score(data, W, b, synthetic)))
+    print("out-of-fold on tune: top-1 %.3f; p_good %.3f keeps %d of %d, %d right" % (
+        np.mean([ok for _, ok in oof]), p_good, kept, len(oof), right))
+    good = [(data.probabilities(W, b, i), i) for i in report]
+    called = [(p, i) for p, i in good if p.max() >= p_good]
+    print("report: top-1 with P >= p_good: %d, right %d" % (
+        len(called), sum(data.A[i, int(np.argmax(p))] > 0 for p, i in called)))
+    for i in tune + report + synthetic[::4]:
+        p = data.probabilities(W, b, i)
+        order = np.argsort(-p)[:3]
+        print("%-3s %-6s %-14s %-42s %s" % ("ok" if data.A[i, order[0]] else "BAD", data.photos[i]["split"],
+              data.photos[i]["kind"], os.path.basename(data.photos[i]["path"]),
+              " ".join("%s %.2f" % (data.names[k], p[k]) for k in order)))
     if args.write:
-        write_header(args.write, args.version, groups, med, w, pen, tau, objective(w, pen, tau, tune),
-                     objective(w, pen, tau, rep) if rep.any() else None, sys.argv)
-    D = shader_distances(dist, w, starts, pen)
-    for i, p in enumerate(photos):
-        order = np.argsort(D[i])[:3]
-        mark = "ok " if accepted[i, order[0]] else "BAD"
-        print(mark, p["split"], p["kind"], os.path.basename(p["path"]), [shaders[k] for k in order],
-              "accepted:", p["accepted"])
+        report_line = "Report split: top-1 %.3f, top-3 %.3f (%d photos); tune top-1 %.3f." % (r1, r3, len(report), t1)
+        data.report_alpha = alpha
+        write_header(args.write, data, W, b, args.version, p_good, sys.argv, report_line)
+        print("wrote", args.write)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,9 @@
 // LIST.tsv: one photo per line, "path<TAB>accepted shaders (comma-separated)<TAB>split<TAB>kind".
 // DIR/evidence.json: shaders, sample counts, group names, photos with labels and scales;
 // DIR/distances.f32: float32 little-endian, [photo][scale][sample of the catalogue in shader order][group];
-// DIR/targets.f32: float32, [photo][scale][feature] (the photo's composite features).
+// DIR/targets.f32: float32, [photo][scale][feature] (the photo's composite features);
+// DIR/structural.f32: float32, [photo][shader]: the best structural similarity of the shader's
+// samples to the whole photo (what match's structural scan computes).
 // The fit of the selection weights reads these files (bench/fit_selection.py).
 #include <fmt/format.h>
 
@@ -28,12 +30,13 @@ using namespace proctex;
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
-  std::string db, list, out;
+  std::string db, list, out, synthetic;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--db") db = argv[i + 1];
     else if (a == "--list") list = argv[i + 1];
     else if (a == "--out") out = argv[i + 1];
+    else if (a == "--synthetic") synthetic = argv[i + 1];
   }
   if (db.empty() || list.empty() || out.empty()) {
     std::fprintf(stderr, "usage: bench_select_dump --db CATALOG --list LIST.tsv --out DIR\n");
@@ -53,6 +56,7 @@ int main(int argc, char** argv) {
     for (size_t g = 0; g < composite->group_count(); ++g) index["groups"].push_back(composite->group_name(g));
     std::ofstream dist(fs::path(out) / "distances.f32", std::ios::binary);
     std::ofstream targ(fs::path(out) / "targets.f32", std::ios::binary);
+    std::ofstream structural(fs::path(out) / "structural.f32", std::ios::binary);
     std::ifstream in(list);
     std::string line;
     std::vector<double> groups(composite->group_count());
@@ -69,6 +73,13 @@ int main(int argc, char** argv) {
       const auto views = search::target_views(photo);
       nlohmann::json entry = {{"path", path}, {"accepted", accepted}, {"split", split}, {"kind", kind},
                               {"scales", views.size()}};
+      const auto whole = metric.features(photo, 256);
+      for (const auto& cat : cats) {
+        float best = 0;
+        for (const auto& sample : cat.samples)
+          best = std::max(best, float(search::structural_similarity(metric, whole, sample.features.values)));
+        structural.write(reinterpret_cast<const char*>(&best), sizeof best);
+      }
       for (const auto& view : views) {
         const auto f = metric.features(view.image, 256);
         targ.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
@@ -84,6 +95,34 @@ int main(int argc, char** argv) {
       }
       index["photos"].push_back(entry);
       std::fprintf(stderr, "\r%d photos", ++n);
+    }
+    // --synthetic CAT2: the samples of another catalogue (another seed) as renders of known shaders,
+    // one view each (their stored features), split "synthetic".
+    if (!synthetic.empty()) {
+      catalog::Store other(synthetic, catalog::Store::Access::Read);
+      for (const auto& s : other.shaders()) {
+        const auto cat2 = other.load(s.name, false);
+        for (size_t k = 0; k < cat2.samples.size(); ++k) {
+          const auto& f = cat2.samples[k].features;
+          for (const auto& cat : cats) {
+            float best = 0;
+            for (const auto& sample : cat.samples)
+              best = std::max(best, float(search::structural_similarity(metric, f, sample.features.values)));
+            structural.write(reinterpret_cast<const char*>(&best), sizeof best);
+          }
+          targ.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
+          for (const auto& cat : cats)
+            for (const auto& sample : cat.samples) {
+              composite->group_distances(f.values, sample.features.values, groups.data());
+              for (double d : groups) {
+                const float v = static_cast<float>(d);
+                dist.write(reinterpret_cast<const char*>(&v), sizeof v);
+              }
+            }
+          index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
+                                     {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
+        }
+      }
     }
     index["feature_size"] = metric.feature_size();
     std::ofstream(fs::path(out) / "evidence.json") << index.dump(1);

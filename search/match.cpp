@@ -36,10 +36,8 @@ struct Start {
 struct ShaderScan {
   catalog::ShaderCatalogue catalogue;
   std::vector<double> similarity;  // per sample: structural similarity to the target (see below)
-  std::vector<double> selection;   // per sample: selection distance to the target (selection.h)
   double best_pruned = 0.0;
   double best_full = 0.0;
-  double best_selection = 0.0;     // smallest selection distance over the samples
   double probability = 0.0;        // selection probability of the shader
 };
 
@@ -58,24 +56,6 @@ std::vector<int> parse_crop(const std::string& text) {
   }
   if (v.size() != 4) throw UsageError("--crop '" + text + "' is not x,y,w,h", "write e.g. --crop 100,50,512,512");
   return v;
-}
-
-// Similarity with the colour component left out: a catalogue sample's colours were drawn at
-// random and are fitted afterwards (colour_fit.h), so starts are chosen by structure alone. The
-// remaining components keep their relative weights. Falls back to the whole metric when it is
-// not a composite (or has nothing but colour).
-double structural_similarity(const metrics::Metric& metric, const metrics::Features& a, std::span<const float> b) {
-  const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric);
-  if (!composite) return metric.similarity(a.values, b);
-  const auto& components = composite->components();
-  double log_s = 0.0, weight = 0.0;
-  for (size_t k = 0; k < components.size(); ++k) {
-    const auto& c = components[k];
-    if (c.metric->id() == "colour" || c.weight <= 0) continue;
-    log_s += c.weight * std::log(std::max(c.metric->similarity(composite->slice(a.values, k), composite->slice(b, k)), 1e-300));
-    weight += c.weight;
-  }
-  return weight > 0 ? std::exp(log_s / weight) : metric.similarity(a.values, b);
 }
 
 // Checks that the catalogue's features were made by the metric this proctex computes.
@@ -222,15 +202,14 @@ nlohmann::json MatchResult::to_json() const {
   nlohmann::json cands = nlohmann::json::array();
   for (const auto& c : candidates)
     cands.push_back({{"shader", c.shader}, {"best_pruned", c.best_pruned}, {"best_full", c.best_full},
-                     {"screened", c.screened}, {"selection_distance", c.selection_distance},
-                     {"selection_probability", c.probability}});
+                     {"screened", c.screened}, {"selection_probability", c.probability}});
   return {{"spec", spec.to_json()}, {"similarity", similarity},     {"metrics", metrics_json},
           {"verdict", verdict},      {"evaluations", evaluations}, {"stopped_early", stopped_early},
           {"candidates", cands},     {"starts", starts},           {"timings", timings},
           {"catalogue", catalogue},
           {"selection_probability", probability},
           {"polish", polish},
-          {"selection", {{"version", default_selection().version}, {"weight", kSelectionWeight}}},
+          {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}}},
           {"thresholds", {{"good", kGoodMatch}, {"good_probability", kGoodProbability}, {"approximate", kApproximateMatch}}}};
 }
 
@@ -252,7 +231,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const auto shaders = usable_shaders(store, o, metric);
   const metrics::Features target_full = metric.features(target, o.resolution);
   const metrics::Features target_coarse = metric.features(target, o.coarse_resolution);
-  const SelectionTarget selection(target, metric, o.resolution);
+  const SelectionTarget selection(target, metric);
   result.timings["target"] = seconds_since(t_start);
 
   // 2. Global search. Every sample of every shader is scored by structure (colour left out:
@@ -268,27 +247,30 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   for (const auto& s : shaders) {
     ShaderScan scan;
     scan.catalogue = store.load(s.name, false);
-    for (const auto& sample : scan.catalogue.samples) {
+    for (const auto& sample : scan.catalogue.samples)
       scan.similarity.push_back(structural_similarity(metric, target_full, sample.features.values));
-      scan.selection.push_back(selection.distance(sample.features.values));
-    }
     for (int i : scan.catalogue.pruned) scan.best_pruned = std::max(scan.best_pruned, scan.similarity[i]);
     scan.best_full = *std::max_element(scan.similarity.begin(), scan.similarity.end());
-    scan.best_selection = *std::min_element(scan.selection.begin(), scan.selection.end());
     scans.push_back(std::move(scan));
   }
   {
-    std::vector<double> distances;
-    for (const auto& scan : scans) distances.push_back(scan.best_selection);
-    const auto p = selection_probabilities(distances, selection.model());
+    std::vector<std::string> names;
+    std::vector<double> nearest;
+    for (const auto& scan : scans) {
+      names.push_back(scan.catalogue.shader);
+      nearest.push_back(scan.best_full);
+    }
+    const auto p = selection.probabilities(names, nearest);
     for (size_t i = 0; i < scans.size(); ++i) scans[i].probability = p[i];
   }
   std::vector<int> order(scans.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  // Ranked by the selection (selection.h): the best sample of the whole catalogue, not of the
-  // pruned graph (the scan is free and the pruned graph can miss the one sample that has the
-  // target's scale or orientation), by distances weighted for material categories.
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return scans[a].best_selection < scans[b].best_selection; });
+  // Ranked by the selection (selection.h): the classifier's probability of the shader's material,
+  // ties (shaders the model does not know) by the structurally closest sample of the whole catalogue.
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    if (scans[a].probability != scans[b].probability) return scans[a].probability > scans[b].probability;
+    return scans[a].best_full > scans[b].best_full;
+  });
   std::vector<int> chosen;
   for (size_t r = 0; r < order.size(); ++r) {
     const bool by_rank = o.candidate_shaders <= 0 || static_cast<int>(r) < o.candidate_shaders || !o.shaders.empty();
@@ -306,7 +288,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     for (size_t i = 0; i < best.size(); ++i) best[i] = static_cast<int>(i);
     const size_t keep = std::min<size_t>(best.size(), std::max(1, o.screen));
     std::partial_sort(best.begin(), best.begin() + keep, best.end(),
-                      [&](int a, int b) { return scan.selection[a] < scan.selection[b]; });
+                      [&](int a, int b) { return scan.similarity[a] > scan.similarity[b]; });
     std::vector<std::vector<float>> packs;
     std::vector<uint32_t> seeds;
     std::vector<std::string> pinned;
@@ -328,7 +310,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     for (const auto& st : screened)
       if (st.shader == scans[c].catalogue.shader) screen_best = std::max(screen_best, st.similarity);
     result.candidates.push_back({scans[c].catalogue.shader, scans[c].best_pruned, scans[c].best_full, screen_best,
-                                 scans[c].best_selection, scans[c].probability});
+                                 scans[c].probability});
   }
   // In the selection's order (`chosen` is): the ranking of the shaders by the evidence the
   // refinement cannot game.
@@ -420,7 +402,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     run_lane(lanes[i], std::max<long>(1, o.refine.max_evaluations - lanes[i].objective->evaluations()),
              "refine " + std::to_string(i + 1) + "/" + std::to_string(finalists));
   struct Refined {
-    const ShaderDecl* decl;
+    const ShaderDecl* decl;  // packed: the refined point (replaced by its polish when that is better)
     std::vector<float> packed;
     uint32_t seed;
     double coarse;
@@ -444,93 +426,88 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   }
   result.timings["local"] = seconds_since(t_local);
 
-  // 4. Final scoring at the full resolution: the coarse optimum of each start, and its start.
+  // 4. Final scoring at the full resolution: the coarse optimum of each finalist, after an exact
+  // polish when the target is a clean pattern (5.), then the choice weighed with the selection.
   report("final");
   const auto t_final = Clock::now();
   double best = -1e300;
   RenderSettings full;
   full.width = full.height = o.resolution;
+  static const metrics::MagnitudeMetric magnitude;
+  const metrics::Features target_magnitude = magnitude.features(target, o.coarse_resolution);
+  const double peakiness = spectral_peakiness(target_magnitude);
+  double polish_seconds = 0;
   for (size_t i = 0; i < refined.size(); ++i) {
-    const auto& rf = refined[i];
+    auto& rf = refined[i];
     const Image img = renderer.render_batch(*rf.decl, {rf.packed}, {rf.seed}, full).front();
-    const metrics::Features f = metric.features(img, o.resolution);
-    const double s = metric.similarity(target_full, f);
+    metrics::Features f = metric.features(img, o.resolution);
+    double s = metric.similarity(target_full, f);
+    ++evaluations;
     result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
+
+    // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
+    // cannot tell 7 from 8 brick courses or a bond from its alias well; the whole Fourier
+    // magnitude can. Kept only if the default similarity agrees that it is better.
+    const auto t_polish = Clock::now();
+    nlohmann::json polish = {{"peakiness", peakiness}};
+    if (o.polish_evaluations > 0 && !(stop && *stop)) {
+      std::vector<std::string> pinned;
+      const std::vector<float> packed = apply_fixed(*rf.decl, rf.packed, o.fixed, pinned);
+      polish["deterministic"] = nearly_deterministic(renderer, *rf.decl, packed, rf.seed);
+      evaluations += 2;
+      if (polish["deterministic"] || peakiness >= kPatternPeakiness) {
+        const ParameterSpace space(*rf.decl, packed, pinned);
+        Objective objective(space, target_magnitude, magnitude, renderer, rf.seed, o.coarse_resolution);
+        if (o.budget.max_seconds > 0)
+          objective.set_budget({0, std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6)});
+        objective.on_progress = [&](const Objective& obj) {
+          if (stop && *stop) objective.stop();
+          state.evaluations = evaluations + obj.evaluations();
+          report("polish " + std::to_string(i + 1) + "/" + std::to_string(refined.size()));
+        };
+        RefineOptions options = o.refine;
+        options.max_evaluations = o.polish_evaluations;
+        const auto r = refine(objective, space.to_unit(packed), options);
+        evaluations += objective.evaluations();
+        // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form
+        // colour fit (colour_fit.h) then sets the free colours from the target's colour statistics.
+        const std::vector<float> polished = space.to_packed(r.unit);
+        const auto recoloured = fit_colours(*rf.decl, {polished}, {rf.seed}, pinned, colour_target, renderer, true).front();
+        evaluations += colour_fit_renders(*rf.decl, pinned, 1) + 2;
+        const auto images = renderer.render_batch(*rf.decl, {polished, recoloured.packed}, {rf.seed, rf.seed}, full);
+        polish["evaluations"] = objective.evaluations();
+        for (int k = 0; k < (recoloured.fitted ? 2 : 1); ++k) {
+          metrics::Features fp = metric.features(images[k], o.resolution);
+          const double sp = metric.similarity(target_full, fp);
+          polish[k ? "recoloured_similarity" : "similarity"] = sp;
+          if (sp > s) {
+            s = sp;
+            f = std::move(fp);
+            rf.packed = k ? recoloured.packed : polished;
+            polish["kept"] = true;
+          }
+        }
+        result.starts[i]["polished_similarity"] = s;
+      }
+    }
+    result.starts[i]["polish"] = polish;
+    polish_seconds += seconds_since(t_polish);
+
     if (decision(s, rf.probability) > best) {
       best = decision(s, rf.probability);
       result.probability = rf.probability;
       result.spec = spec_from_packed(*rf.decl, rf.packed, rf.seed);
       result.similarity = s;
+      result.polish = polish;
       result.per_metric.clear();
       if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
         for (const auto& [name, value] : composite->breakdown(target_full.values, f.values)) result.per_metric[name] = value;
       result.per_metric[metric.id()] = s;
     }
   }
-  result.evaluations = evaluations + static_cast<long>(refined.size());
+  result.timings["polish"] = polish_seconds;  // included in "final"
   result.timings["final"] = seconds_since(t_final);
-
-  // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
-  // cannot tell 7 from 8 brick courses or a bond from its alias well; the whole Fourier magnitude
-  // can. Kept only if the default similarity agrees that it is better.
-  const auto t_polish = Clock::now();
-  if (o.polish_evaluations > 0 && !(stop && *stop) && best > -1e300) {
-    const ShaderDecl& decl = library.get(result.spec.shader);
-    std::vector<std::string> pinned;
-    const std::vector<float> packed = apply_fixed(decl, resolve(decl, result.spec), o.fixed, pinned);
-    static const metrics::MagnitudeMetric magnitude;
-    const metrics::Features target_magnitude = magnitude.features(target, o.coarse_resolution);
-    nlohmann::json polish = {{"deterministic", nearly_deterministic(renderer, decl, packed, result.spec.seed)},
-                             {"peakiness", spectral_peakiness(target_magnitude)}};
-    evaluations += 2;
-    if (polish["deterministic"] || polish["peakiness"].get<double>() >= kPatternPeakiness) {
-      const ParameterSpace space(decl, packed, pinned);
-      Objective objective(space, target_magnitude, magnitude, renderer, result.spec.seed, o.coarse_resolution);
-      if (o.budget.max_seconds > 0) objective.set_budget({0, std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6)});
-      objective.on_progress = [&](const Objective& obj) {
-        if (stop && *stop) objective.stop();
-        state.evaluations = evaluations + obj.evaluations();
-        report("polish");
-      };
-      RefineOptions options = o.refine;
-      options.max_evaluations = o.polish_evaluations;
-      const auto r = refine(objective, space.to_unit(packed), options);
-      evaluations += objective.evaluations();
-      // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form colour
-      // fit (colour_fit.h) then sets the free colours from the target's colour statistics.
-      std::vector<float> polished = space.to_packed(r.unit);
-      const auto recoloured = fit_colours(decl, {polished}, {result.spec.seed}, pinned, colour_target, renderer, true).front();
-      evaluations += colour_fit_renders(decl, pinned, 1);
-      const auto images = renderer.render_batch(decl, {polished, recoloured.packed}, {result.spec.seed, result.spec.seed}, full);
-      evaluations += 2;
-      metrics::Features f = metric.features(images[0], o.resolution);
-      double s = metric.similarity(target_full, f);
-      if (recoloured.fitted) {
-        metrics::Features f2 = metric.features(images[1], o.resolution);
-        const double s2 = metric.similarity(target_full, f2);
-        polish["recoloured_similarity"] = s2;
-        if (s2 > s) {
-          s = s2;
-          f = std::move(f2);
-          polished = recoloured.packed;
-        }
-      }
-      polish["similarity"] = s;
-      polish["kept"] = s > result.similarity;
-      polish["evaluations"] = objective.evaluations();
-      if (s > result.similarity) {
-        result.spec = spec_from_packed(decl, polished, result.spec.seed);
-        result.similarity = s;
-        result.per_metric.clear();
-        if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
-          for (const auto& [name, value] : composite->breakdown(target_full.values, f.values)) result.per_metric[name] = value;
-        result.per_metric[metric.id()] = s;
-      }
-    }
-    result.polish = polish;
-  }
-  result.timings["polish"] = seconds_since(t_polish);
-  result.evaluations = evaluations + static_cast<long>(refined.size());
+  result.evaluations = evaluations;
   result.verdict = verdict_for(result.similarity, result.probability);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above

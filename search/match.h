@@ -20,7 +20,7 @@
 
 #include "image/image.h"
 #include "search/refine.h"
-#include "search/selection_weights.h"
+#include "search/selection_model.h"
 #include "shaders/spec.h"
 
 namespace proctex::catalog {
@@ -36,9 +36,10 @@ inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unr
 // A similarity alone is gamed by flexible shaders (they refine into statistical look-alikes), so
 // "good" also needs the shader selection (selection.h) to find the material likely: the
 // threshold on its probability was calibrated on the labelled real photos (docs/match-evaluation.md).
-inline constexpr double kGoodProbability = selection::kGoodProbability;
-// The final choice maximises log S + kSelectionWeight * log P(shader) (fitted on the same photos).
-inline constexpr double kSelectionWeight = selection::kSelectionWeight;
+inline constexpr double kGoodProbability = selection_model::kGoodProbability;
+// The final choice among the finalists maximises log S + kSelectionWeight * log P(shader): the
+// similarity as a likelihood and the selection as the prior, with equal say.
+inline constexpr double kSelectionWeight = 1.0;
 
 // "good", "approximate" or "no-match".
 std::string verdict_for(double similarity, double probability);
@@ -70,7 +71,6 @@ struct Candidate {
   double best_pruned = 0.0;   // best similarity over the pruned graph
   double best_full = 0.0;     // best over the full catalogue (candidates only)
   double screened = 0.0;      // best whole-metric similarity after the colour fit (screening)
-  double selection_distance = 0.0;  // selection.h: smallest weighted distance over the samples
   double probability = 0.0;         // selection probability of the shader (softmax over shaders)
 };
 

@@ -3,11 +3,13 @@
 //
 // A photo shows a material at an unknown scale, and a flexible shader refined against the
 // similarity can tune itself into a statistical look-alike of almost anything (a metamer of the
-// metric). So the material is decided on evidence the refinement cannot game: the distances of
-// the photo's views (several scales) to the catalogue's samples, weighted per feature group with
-// weights fitted to material categories on a labelled set of real photos (bench/realset,
-// bench/fit_selection.py), not to same-texture retrieval. The refinement only tunes the
-// parameters of the selected shaders; the selection's probability enters the verdict.
+// metric). So the material is decided on evidence the refinement cannot game: a classifier from
+// the photo's structural statistics (the default metric's spectrum, pyramid and structure
+// features of several views of the photo) to the library's shaders, trained on the catalogue's
+// renders and on labelled real photos (bench/realset, bench/fit_selection.py; the model is the
+// generated search/selection_model.h). The refinement only tunes the parameters of likely
+// shaders, the final choice weighs the similarity with the selection's probability, and "good"
+// needs that probability (search/match.h).
 #include <span>
 #include <string>
 #include <vector>
@@ -26,37 +28,31 @@ struct TargetView {
 };
 std::vector<TargetView> target_views(const Image& photo, int resolution = 256);
 
-// The fitted selection model: weight / median per feature group of the default metric (colour
-// groups are 0: a catalogue sample's colours are random until fitted), a penalty per view (a
-// closer view is a weaker hypothesis), and the softmax temperature of the probabilities.
-struct SelectionModel {
-  int version = 0;                   // bumped with every refit (recorded in match results)
-  std::vector<double> group_scale;   // weight_g / median_g
-  std::vector<double> view_penalty;  // per view of target_views(), in order
-  double temperature = 1.0;
-};
-const SelectionModel& default_selection();
+// Similarity with the colour component left out: a catalogue sample's colours were drawn at
+// random and are fitted afterwards (colour_fit.h), so samples are compared by structure alone. The
+// remaining components of the composite keep their relative weights (the whole metric when it is
+// not a composite).
+double structural_similarity(const metrics::Metric& metric, const metrics::Features& a, std::span<const float> b);
 
-// The target's side of the selection: features of every view, computed once.
+// The selection model's version (recorded in match results).
+int selection_version();
+
+// The target's side of the selection: the classifier's logits for every view, computed once.
 class SelectionTarget {
  public:
-  SelectionTarget(const Image& photo, const metrics::Metric& metric, int resolution,
-                  const SelectionModel& model = default_selection());
-  // Smallest weighted group distance of the views to one catalogue sample's features (>= 0);
-  // `view` receives the index of the view that gave it.
-  double distance(std::span<const float> sample, int* view = nullptr) const;
+  // Throws proctex::Error when `metric` is not the metric the model was fitted on.
+  SelectionTarget(const Image& photo, const metrics::Metric& metric);
+  // Probability of each of `shaders`: softmax over them of each shader's largest logit over the
+  // views plus kStructuralWeight * log(its best structural similarity in the catalogue, given in
+  // `best_structural`, same order): the nearest-sample evidence recognises clean renders. A shader
+  // the model does not know (a user's shader) gets the lowest known logit.
+  std::vector<double> probabilities(const std::vector<std::string>& shaders,
+                                    const std::vector<double>& best_structural) const;
   const std::vector<std::string>& view_names() const { return names_; }
-  const SelectionModel& model() const { return model_; }
 
  private:
-  const metrics::Metric& metric_;
-  const SelectionModel& model_;
   std::vector<std::string> names_;
-  std::vector<metrics::Features> views_;
+  std::vector<double> logits_;  // per model shader: largest over the views
 };
-
-// Softmax probabilities of shaders from their selection distances (the smallest over each
-// shader's samples), in the same order.
-std::vector<double> selection_probabilities(const std::vector<double>& distances, const SelectionModel& model);
 
 }  // namespace proctex::search
