@@ -2,6 +2,7 @@
 //   bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR]
 //                    [--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K]
 //                    [--candidates M] [--screen-resolution R] [--race R]
+//                    [--real LABELS [--split tune|report|all] [--real-images DIR]] [--json FILE]
 // Synthetic: N targets, target i from shader i mod L of the library (sorted by name) at a random
 // point of its unit parameter space (a portable random stream from --seed, so not a catalogue
 // sample) rendered at 256x256 with render seed 7000000 + i (the catalogue's render seeds are
@@ -11,6 +12,18 @@
 // deterministic shaders (two render seeds give the same image) the parameter error: mean
 // |unit difference| over the searchable dimensions and whether every discrete parameter is exact.
 // Photos: every image in --photos is matched, with a side-by-side picture in --pictures.
+// Noise ceiling (synthetic): the target's spec rendered with other render seeds (+1, 2, 3 x 10^6),
+// compared with the target under the default metric at the match resolution, mean of the 3: what
+// the exact spec scores against this instance (1 for deterministic shaders; a match refined on the
+// instance can exceed it). "reproduced" = shader identified or S >= 0.95 x ceiling.
+// Real set (--real LABELS, issue 12): every image of --split (tune|report|all) of the labelled
+// set (bench/realset/labels.json, images built by bench/realset/build.py into --real-images) is
+// matched. Reported: category accuracy (matched shader among the image's accepted shaders), top-3
+// accuracy of the result's shader ranking (first 3 distinct shaders of: the finalists by final
+// similarity, the other raced starts by coarse similarity, then the candidates by screened
+// similarity), the share of wrong-category results called `good`, and the precision of `good`.
+// With --pictures: <id>.jpg (photo | match render), real-<split>.jpg (all pairs) and <id>.json
+// (the whole match result with the label and the scores); --json FILE: summary + per-image rows.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -19,10 +32,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <array>
+#include <map>
+#include <set>
 #include <string>
 
 #include "catalog/store.h"
 #include "core/error.h"
+#include "metrics/metric.h"
 #include "search/match.h"
 #include "shaders/library.h"
 #include "shaders/parameter_space.h"
@@ -60,11 +77,43 @@ bool deterministic(Renderer& r, const ShaderDecl& decl, const std::vector<float>
 
 Image side_by_side_tile(const Image& img, int side) { return resize(center_crop_square(img), side, side); }
 
+// The match result's shader ranking: the finalists by their final similarity (the matched shader
+// first), then the other raced starts by their coarse similarity, then the screened candidates;
+// each shader once.
+std::vector<std::string> shader_ranking(const search::MatchResult& r) {
+  std::vector<std::string> out;
+  auto add = [&](const std::string& s) {
+    if (!s.empty() && std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
+  };
+  add(r.spec.shader);
+  std::vector<std::pair<double, std::string>> finals, raced;
+  for (const auto& st : r.starts) {
+    const std::string shader = st.value("shader", "");
+    if (st.contains("refined_similarity")) finals.push_back({st["refined_similarity"].get<double>(), shader});
+    else raced.push_back({st.value("refined_similarity_coarse", 0.0), shader});
+  }
+  auto by_score = [](const auto& a, const auto& b) { return a.first > b.first; };
+  std::stable_sort(finals.begin(), finals.end(), by_score);
+  std::stable_sort(raced.begin(), raced.end(), by_score);
+  for (const auto& f : finals) add(f.second);
+  for (const auto& f : raced) add(f.second);
+  for (const auto& c : r.candidates) add(c.shader);  // already by screened similarity
+  return out;
+}
+
+std::string join(const std::vector<std::string>& v, const char* sep = ", ") {
+  std::string out;
+  for (const auto& s : v) out += (out.empty() ? "" : sep) + s;
+  return out;
+}
+
+std::string percent(int a, int b) { return b ? fmt::format("{}/{} ({:.0f}%)", a, b, 100.0 * a / b) : "0/0 (-)"; }
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string db, photos, pictures, markdown, only;
-  int targets = 53, starts = -1, candidates = -1, screen_resolution = -1, race = -1;
+  std::string db, photos, pictures, markdown, only, real, split = "tune", real_images = "build/realset/images", json_out;
+  int targets = -1, starts = -1, candidates = -1, screen_resolution = -1, race = -1;
   long evaluations = -1;
   uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
@@ -72,7 +121,14 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
                 "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
-                "[--screen-resolution R] [--race R]");
+                "[--screen-resolution R] [--race R] [--real LABELS [--split tune|report|all] [--real-images DIR]] "
+                "[--json FILE]\n"
+                "  --targets N      synthetic targets (default 53, or 0 with --real)\n"
+                "  --real LABELS    labelled real-texture set (bench/realset/labels.json; build the images with\n"
+                "                   python3 bench/realset/build.py): category / top-3 accuracy, wrong-but-good share\n"
+                "  --split S        tune (default), report or all\n"
+                "  --real-images D  folder of <id>.png (default build/realset/images)\n"
+                "  --json FILE      summary and per-image rows as JSON");
       return 0;
     }
     if (i + 1 >= argc) {
@@ -92,6 +148,10 @@ int main(int argc, char** argv) {
     else if (a == "--candidates") candidates = std::stoi(v);
     else if (a == "--race") race = std::stoi(v);
     else if (a == "--screen-resolution") screen_resolution = std::stoi(v);
+    else if (a == "--real") real = v;
+    else if (a == "--split") split = v;
+    else if (a == "--real-images") real_images = v;
+    else if (a == "--json") json_out = v;
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -101,6 +161,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--db CATALOG is required\n");
     return 2;
   }
+  if (split != "tune" && split != "report" && split != "all") {
+    std::fprintf(stderr, "--split must be tune, report or all\n");
+    return 2;
+  }
+  if (targets < 0) targets = real.empty() ? 53 : 0;
   try {
     const auto& lib = ShaderLibrary::builtin();
     catalog::Store store(db, catalog::Store::Access::Read);
@@ -124,10 +189,12 @@ int main(int argc, char** argv) {
     Random rng{seed};
 
     std::string table =
-        "| # | target shader | structural rank | matched | S | verdict | time (s) | renders | param error | discrete "
-        "exact |\n|---|---|---|---|---|---|---|---|---|---|\n";
-    std::vector<double> sims, times, param_errors, ranks;
-    int identified = 0, det_total = 0, det_exact = 0, good = 0, approximate = 0;
+        "| # | target shader | structural rank | matched | S | ceiling | S/ceiling | reproduced | verdict | time (s) | "
+        "renders | param error | discrete exact |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    std::vector<double> sims, times, param_errors, ranks, ceilings, ratios;
+    int identified = 0, det_total = 0, det_exact = 0, good = 0, approximate = 0, reproduced = 0;
+    const metrics::Metric& metric = metrics::default_metric();
+    nlohmann::json synthetic_rows = nlohmann::json::array();
     std::vector<Image> tiles;
     std::vector<std::string> labels;
     for (int i = 0; i < targets; ++i) {
@@ -140,6 +207,14 @@ int main(int argc, char** argv) {
       const uint32_t render_seed = 7000000u + i;
       RenderSettings rs;
       const Image target = renderer.render_batch(decl, {packed}, {render_seed}, rs).front();
+      // Noise ceiling: the same spec with other render seeds, against the target (mean of 3).
+      const auto target_features = metric.features(target, options.resolution);
+      std::vector<double> seed_similarities;
+      for (const Image& other :
+           renderer.render_batch(decl, {packed, packed, packed}, {render_seed + 1000000u, render_seed + 2000000u,
+                                                                   render_seed + 3000000u}, rs))
+        seed_similarities.push_back(metric.similarity(target_features, metric.features(other, options.resolution)));
+      const double ceiling = (seed_similarities[0] + seed_similarities[1] + seed_similarities[2]) / 3.0;
       const auto t0 = std::chrono::steady_clock::now();
       const auto r = search::match(target, store, options);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -155,6 +230,11 @@ int main(int argc, char** argv) {
                                                            : std::to_string(found - by_structure.begin() + 1);
       ranks.push_back(found == by_structure.end() ? 1e9 : double(found - by_structure.begin() + 1));
       identified += hit;
+      const double ratio = ceiling > 0 ? r.similarity / ceiling : 0.0;
+      const bool repro = hit || r.similarity >= 0.95 * ceiling;
+      reproduced += repro;
+      ceilings.push_back(ceiling);
+      ratios.push_back(ratio);
       good += r.verdict == "good";
       approximate += r.verdict == "approximate";
       sims.push_back(r.similarity);
@@ -179,13 +259,19 @@ int main(int argc, char** argv) {
           exact = "no";
         }
       }
-      table += fmt::format("| {} | {} | {} | {} | {:.3f} | {} | {:.1f} | {} | {} | {} |\n", i + 1, decl.name, rank, r.spec.shader,
-                           r.similarity, r.verdict, secs, r.evaluations, err, exact);
-      std::fprintf(stderr, "%2d/%d %-14s (rank %s) -> %-14s S=%.3f %-11s %.1f s\n", i + 1, targets, decl.name.c_str(),
-                   rank.c_str(), r.spec.shader.c_str(), r.similarity, r.verdict.c_str(), secs);
+      table += fmt::format("| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {} | {} | {:.1f} | {} | {} | {} |\n", i + 1,
+                           decl.name, rank, r.spec.shader, r.similarity, ceiling, ratio, repro ? "yes" : "no", r.verdict,
+                           secs, r.evaluations, err, exact);
+      synthetic_rows.push_back({{"target", i + 1}, {"shader", decl.name}, {"matched", r.spec.shader}, {"identified", hit},
+                                {"similarity", r.similarity}, {"ceiling", ceiling},
+                                {"ceiling_per_seed", seed_similarities}, {"ratio", ratio},
+                                {"reproduced", repro}, {"verdict", r.verdict}, {"seconds", secs}});
+      std::fprintf(stderr, "%2d/%d %-14s (rank %s) -> %-14s S=%.3f ceiling %.3f %-11s %.1f s\n", i + 1, targets,
+                   decl.name.c_str(), rank.c_str(), r.spec.shader.c_str(), r.similarity, ceiling, r.verdict.c_str(), secs);
       if (!pictures.empty()) {  // the whole result, to see where a miss was lost (scan, screen, race)
         nlohmann::json j = r.to_json();
-        j["target"] = {{"spec", spec_from_packed(decl, packed, render_seed).to_json()}, {"seconds", secs}};
+        j["target"] = {{"spec", spec_from_packed(decl, packed, render_seed).to_json()}, {"seconds", secs},
+                       {"ceiling", ceiling}, {"ceiling_per_seed", seed_similarities}, {"reproduced", repro}};
         std::ofstream(fs::path(pictures) / fmt::format("{:02d}-{}.json", i + 1, decl.name)) << j.dump(1) << "\n";
       }
       if (!pictures.empty() && tiles.size() < 64) {
@@ -200,13 +286,15 @@ int main(int argc, char** argv) {
     if (!pictures.empty() && !tiles.empty())
       save_image(contact_sheet(tiles, labels, 8, 128), fs::path(pictures) / "synthetic.jpg");
     const double worst = times.empty() ? NAN : *std::max_element(times.begin(), times.end());
-    std::string summary = fmt::format(
-        "Synthetic recovery: {} targets, shader identified {}/{} ({:.0f}%), target shader among the first 1 / 5 / "
+    std::string summary = targets <= 0 ? std::string() : fmt::format(
+        "Synthetic recovery: {} targets, shader identified {}/{} ({:.0f}%), reproduced (identified or S >= 0.95 x "
+        "noise ceiling) {}, median S / ceiling {:.3f}, median ceiling {:.3f}, target shader among the first 1 / 5 / "
         "12 of the structural scan {} / {} / {}, median S {:.3f}, verdicts good {} / "
         "approximate {} / no-match {}; deterministic targets {}: all discrete parameters exact {}, median "
         "parameter error {:.3f} (mean |unit difference|, identified ones); time per match median {:.1f} s, worst "
         "{:.1f} s.\n\n",
-        targets, identified, targets, 100.0 * identified / std::max(1, targets),
+        targets, identified, targets, 100.0 * identified / std::max(1, targets), percent(reproduced, targets),
+        median(ratios), median(ceilings),
         std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 1; }),
         std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 5; }),
         std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 12; }), median(sims), good, approximate,
@@ -244,9 +332,159 @@ int main(int argc, char** argv) {
                      r.verdict.c_str(), secs);
       }
     }
-    const std::string report = summary + table + "\n" + photo_table;
+    std::string real_report;
+    nlohmann::json real_json;
+    if (!real.empty()) {
+      nlohmann::json labels;
+      if (!fs::is_regular_file(real)) throw Error("labels file " + real + " not found", "give --real bench/realset/labels.json");
+      try {
+        labels = nlohmann::json::parse(std::ifstream(real));
+      } catch (const std::exception& e) {
+        throw Error("cannot read the labels " + real + ": " + e.what(), "give --real bench/realset/labels.json");
+      }
+      if (!labels.contains("images") || !labels["images"].is_array())
+        throw Error(real + " has no \"images\" array", "give --real bench/realset/labels.json");
+      struct Row {
+        std::string id, kind;
+        std::vector<std::string> accepted, top3;
+        std::string matched, verdict;
+        double similarity = 0, seconds = 0;
+        bool right = false, right3 = false;
+      };
+      std::vector<Row> rows;
+      std::vector<nlohmann::json> items;
+      for (const auto& item : labels["images"])
+        if (split == "all" || item.value("split", "") == split) items.push_back(item);
+      if (items.empty()) throw Error("no images of split " + split + " in " + real, "check --split");
+      {  // all present before minutes of matching
+        std::vector<std::string> missing;
+        for (const auto& item : items)
+          if (!fs::exists(fs::path(real_images) / (item.value("id", "") + ".png"))) missing.push_back(item.value("id", ""));
+        if (!missing.empty())
+          throw Error(fmt::format("{} of the {} images of split {} are missing in {} (first: {}.png)", missing.size(),
+                                  items.size(), split, real_images, missing.front()),
+                      "build the set first: python3 bench/realset/build.py");
+      }
+      std::vector<Image> tiles;
+      std::vector<std::string> tile_labels;
+      const int tile = 256;  // 6 columns: 3 photo | match pairs a row
+      for (size_t n = 0; n < items.size(); ++n) {
+        const auto& item = items[n];
+        Row row;
+        row.id = item.at("id").get<std::string>();
+        row.kind = item.at("kind").get<std::string>();
+        row.accepted = item.at("accepted").get<std::vector<std::string>>();
+        const fs::path file = fs::path(real_images) / (row.id + ".png");
+        if (!fs::exists(file))
+          throw Error(file.string() + " is missing", "build the set first: python3 bench/realset/build.py");
+        const Image target = search::prepare_target(file, "");
+        const auto t0 = std::chrono::steady_clock::now();
+        const auto r = search::match(target, store, options);
+        row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        row.matched = r.spec.shader;
+        row.similarity = r.similarity;
+        row.verdict = r.verdict;
+        const std::set<std::string> ok(row.accepted.begin(), row.accepted.end());
+        row.right = ok.count(row.matched) > 0;
+        const auto ranking = shader_ranking(r);
+        for (size_t k = 0; k < ranking.size() && k < 3; ++k) {
+          row.top3.push_back(ranking[k]);
+          row.right3 |= ok.count(ranking[k]) > 0;
+        }
+        std::fprintf(stderr, "%2zu/%zu %-40s %-14s -> %-14s S=%.3f %-11s %s %.1f s\n", n + 1, items.size(), row.id.c_str(),
+                     row.kind.c_str(), row.matched.c_str(), row.similarity, row.verdict.c_str(),
+                     row.right ? "right" : (row.right3 ? "top-3" : "WRONG"), row.seconds);
+        if (!pictures.empty()) {
+          nlohmann::json j = r.to_json();
+          j["label"] = item;
+          j["evaluation"] = {{"right", row.right}, {"top3", row.top3}, {"right_top3", row.right3},
+                             {"ranking", ranking}, {"seconds", row.seconds}};
+          std::ofstream(fs::path(pictures) / (row.id + ".json")) << j.dump(1) << "\n";
+          RenderSettings rs;
+          rs.width = rs.height = 256;
+          const Image photo_tile = side_by_side_tile(target, 256);
+          const Image m = renderer.render(r.spec, rs);
+          const std::string verdict_text = fmt::format("{} S={:.2f} {} {}", row.matched, row.similarity, row.verdict,
+                                                       row.right ? "(right)" : "(WRONG)");
+          save_image(contact_sheet({photo_tile, m}, {row.id, verdict_text}, 2, 256), fs::path(pictures) / (row.id + ".jpg"));
+          tiles.push_back(resize(photo_tile, tile, tile));
+          tile_labels.push_back(row.id);
+          tiles.push_back(resize(m, tile, tile));
+          tile_labels.push_back(fmt::format("{} {} {:.2f} {}", row.right ? "ok" : "X", row.matched, row.similarity,
+                                            row.verdict == "approximate" ? "approx" : row.verdict));
+        }
+        rows.push_back(std::move(row));
+      }
+      if (!pictures.empty() && !tiles.empty())
+        save_image(contact_sheet(tiles, tile_labels, 6, tile), fs::path(pictures) / ("real-" + split + ".jpg"));
+
+      const int total = static_cast<int>(rows.size());
+      int right = 0, right3 = 0, wrong_good = 0, good_total = 0, good_right = 0, approx = 0;
+      std::vector<double> secs;
+      std::map<std::string, std::array<int, 3>> per_kind;  // n, right, top-3
+      for (const auto& row : rows) {
+        right += row.right;
+        right3 += row.right3;
+        good_total += row.verdict == "good";
+        good_right += row.verdict == "good" && row.right;
+        wrong_good += row.verdict == "good" && !row.right;
+        approx += row.verdict == "approximate";
+        secs.push_back(row.seconds);
+        auto& k = per_kind[row.kind];
+        k[0]++;
+        k[1] += row.right;
+        k[2] += row.right3;
+      }
+      real_report = fmt::format(
+          "Real set ({}, split {}): {} images; category accuracy {}, top-3 accuracy {}, wrong-category results "
+          "called good {} of the wrong ones, precision of good (right kind among good) {}; verdicts good {} / "
+          "approximate {} / no-match {}; time per match median {:.1f} s.\n\n",
+          real, split, total, percent(right, total), percent(right3, total), percent(wrong_good, total - right),
+          percent(good_right, good_total), good_total, approx, total - good_total - approx, median(secs));
+      real_report += "| kind | images | right | top-3 |\n|---|---|---|---|\n";
+      for (const auto& [kind, k] : per_kind) real_report += fmt::format("| {} | {} | {} | {} |\n", kind, k[0], k[1], k[2]);
+      real_report +=
+          "\n| image | kind | accepted | matched | S | verdict | right? | top-3 | time (s) |\n"
+          "|---|---|---|---|---|---|---|---|---|\n";
+      nlohmann::json jrows = nlohmann::json::array();
+      for (const auto& row : rows) {
+        real_report += fmt::format("| {} | {} | {} | {} | {:.3f} | {} | {} | {} | {:.1f} |\n", row.id, row.kind,
+                                   join(row.accepted), row.matched, row.similarity, row.verdict,
+                                   row.right ? "yes" : (row.right3 ? "no (top-3)" : "no"), join(row.top3), row.seconds);
+        jrows.push_back({{"id", row.id}, {"kind", row.kind}, {"accepted", row.accepted}, {"matched", row.matched},
+                         {"similarity", row.similarity}, {"verdict", row.verdict}, {"right", row.right},
+                         {"top3", row.top3}, {"right_top3", row.right3}, {"seconds", row.seconds}});
+      }
+      real_json = {{"labels", real},
+                   {"split", split},
+                   {"images", total},
+                   {"category_accuracy", total ? double(right) / total : 0.0},
+                   {"top3_accuracy", total ? double(right3) / total : 0.0},
+                   {"wrong_good_share", total - right ? double(wrong_good) / (total - right) : 0.0},
+                   {"good_precision", good_total ? double(good_right) / good_total : 0.0},
+                   {"right", right},
+                   {"right_top3", right3},
+                   {"wrong_good", wrong_good},
+                   {"good", good_total},
+                   {"median_seconds", median(secs)},
+                   {"rows", jrows}};
+    }
+
+    const std::string report =
+        summary + (targets > 0 ? table + "\n" : std::string()) + photo_table + (photo_table.empty() ? "" : "\n") + real_report;
     std::fputs(report.c_str(), stdout);
     if (!markdown.empty()) std::ofstream(markdown) << report;
+    if (!json_out.empty()) {
+      nlohmann::json j = {{"catalogue", db}};
+      if (targets > 0)
+        j["synthetic"] = {{"targets", targets},       {"identified", identified},       {"reproduced", reproduced},
+                          {"median_ratio", median(ratios)}, {"median_ceiling", median(ceilings)},
+                          {"median_similarity", median(sims)}, {"rows", synthetic_rows}};
+      if (!real_json.is_null()) j["real"] = real_json;
+      const fs::path tmp = json_out + ".tmp";
+      std::ofstream(tmp) << j.dump(1) << "\n";
+      fs::rename(tmp, json_out);
+    }
   } catch (const Error& e) {
     std::fprintf(stderr, "bench_match_eval: %s (%s)\n", e.message().c_str(), e.hint().c_str());
     return 1;

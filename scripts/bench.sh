@@ -24,4 +24,16 @@ if [[ -x "$build/bench/bench_morph" ]]; then
   echo "== $build/bench/bench_morph (120 frames at 512x512, builds a bricks catalogue first)"
   "$build/bench/bench_morph" --repetitions 3 --markdown "$results/morph.md"
 fi
+if [[ -x "$build/bench/bench_match_eval" && -x "$build/cli/proctex" ]] && command -v python3 >/dev/null; then
+  # Issue 12: the report half of the labelled real-texture set (docs/realset.md). The images are
+  # fetched from Debian game-data packages once (~1.2 GB of downloads into $build/realset); the
+  # catalogue is built (incrementally) at $PROCTEX_BENCH_CATALOG, default $build/bench-cat48.sqlite.
+  echo "== $build/bench/bench_match_eval --real (report split of bench/realset/labels.json)"
+  python3 bench/realset/build.py --out "$build/realset"
+  cat48=${PROCTEX_BENCH_CATALOG:-$build/bench-cat48.sqlite}
+  "$build/cli/proctex" catalog build --db "$cat48" --samples 48 --probes 0
+  "$build/bench/bench_match_eval" --db "$cat48" --real bench/realset/labels.json --split report \
+    --real-images "$build/realset/images" --pictures "$results/match-real" \
+    --markdown "$results/match-real.md" --json "$results/match-real.json"
+fi
 echo "bench: tables in $results/"

@@ -14,7 +14,7 @@ packages=(
   fonts-dejavu-core
 )
 if [[ "${1:-}" == "--with-bench" ]]; then
-  packages+=(hyperfine)
+  packages+=(hyperfine python3)  # python3: bench/realset/build.py (it fetches its own game-data .debs)
 fi
 
 missing=()
