@@ -19,9 +19,8 @@
 // Real set (--real LABELS, issue 12): every image of --split (tune|report|all) of the labelled
 // set (bench/realset/labels.json, images built by bench/realset/build.py into --real-images) is
 // matched. Reported: category accuracy (matched shader among the image's accepted shaders), top-3
-// accuracy of the result's shader ranking (first 3 distinct shaders of: the finalists by final
-// similarity, the other raced starts by coarse similarity, then the candidates by screened
-// similarity), the share of wrong-category results called `good`, and the precision of `good`.
+// accuracy of the result's shader ranking (the matched shader, then the candidates in the
+// selection's order), the share of wrong-category results called `good`, and the precision of `good`.
 // With --pictures: <id>.jpg (photo | match render), real-<split>.jpg (all pairs) and <id>.json
 // (the whole match result with the label and the scores); --json FILE: summary + per-image rows.
 #include <fmt/format.h>
@@ -80,24 +79,15 @@ Image side_by_side_tile(const Image& img, int side) { return resize(center_crop_
 // The match result's shader ranking: the finalists by their final similarity (the matched shader
 // first), then the other raced starts by their coarse similarity, then the screened candidates;
 // each shader once.
+// The result's shader ranking: the matched shader, then the candidates in the selection's order
+// (search/selection.h: most likely material first).
 std::vector<std::string> shader_ranking(const search::MatchResult& r) {
   std::vector<std::string> out;
   auto add = [&](const std::string& s) {
     if (!s.empty() && std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
   };
   add(r.spec.shader);
-  std::vector<std::pair<double, std::string>> finals, raced;
-  for (const auto& st : r.starts) {
-    const std::string shader = st.value("shader", "");
-    if (st.contains("refined_similarity")) finals.push_back({st["refined_similarity"].get<double>(), shader});
-    else raced.push_back({st.value("refined_similarity_coarse", 0.0), shader});
-  }
-  auto by_score = [](const auto& a, const auto& b) { return a.first > b.first; };
-  std::stable_sort(finals.begin(), finals.end(), by_score);
-  std::stable_sort(raced.begin(), raced.end(), by_score);
-  for (const auto& f : finals) add(f.second);
-  for (const auto& f : raced) add(f.second);
-  for (const auto& c : r.candidates) add(c.shader);  // already by screened similarity
+  for (const auto& c : r.candidates) add(c.shader);
   return out;
 }
 
