@@ -26,8 +26,8 @@ using testing::TempDir;
 const std::string kScripts = std::string(PROCTEX_SOURCE_DIR) + "/scripts";
 // 6 cheap shaders, 3 shards of 2 (balanced by the committed cost table), small settings.
 const std::string kBuildArgs =
-    "--shaders checker,circle,stripes,grid,swirl,rectangle --samples 10 --resolution 128 --probes 4 "
-    "--set max_iterations=2 --seed 3";
+    "--shaders checker,circle,stripes,grid,swirl,rectangle --samples 8 --probes 2 "
+    "--set max_iterations=1 --seed 3";
 
 struct Shell {
   int code = -1;
