@@ -12,6 +12,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libeigen3-dev
   libgtest-dev googletest libbenchmark-dev
   fonts-dejavu-core
+  slurm-wlm munge nodejs npm
 )
 if [[ "${1:-}" == "--with-bench" ]]; then
   packages+=(hyperfine)
