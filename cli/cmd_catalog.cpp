@@ -165,6 +165,7 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
       const auto p = catalog::plan_shards(names, n, costs);
       if (pc->json) {
         all.push_back(p.to_json());
+        all.back()["costs"] = costs.to_json();  // per shader: cost and where it came from
         continue;
       }
       std::vector<std::vector<std::string>> rows = {{"shard", "cost", "shaders"}};
