@@ -2,6 +2,10 @@
 // bad photo in the middle. Real catalogue (3 cheap shaders), real renders as photos.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -20,15 +24,25 @@ const char* kQuick = " --starts 1 --race 2 --evaluations 20 --candidates 3";
 
 class MatchBatch : public ::testing::Test {
  protected:
+  // ctest runs each test in its own process: the catalogue lives in the build tree and is built
+  // incrementally under a lock (the first process builds it, the others find it unchanged).
   static void SetUpTestSuite() {
     dir_ = new TempDir;
+    const std::string lock = db() + ".lock";
+    const int fd = ::open(lock.c_str(), O_CREAT | O_RDWR, 0644);
+    ASSERT_GE(fd, 0);
+    ::flock(fd, LOCK_EX);
     const auto r = run_proctex("-q catalog build --db '" + db() + "' --shaders checker,stripes,circle --samples 12 "
                                "--probes 0 --set max_iterations=1 --seed 2",
                                dir_->path());
+    ::flock(fd, LOCK_UN);
+    ::close(fd);
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   static void TearDownTestSuite() { delete dir_; }
-  static std::string db() { return (*dir_ / "cat.sqlite").string(); }
+  static std::string db() {
+    return (fs::path(PROCTEX_BINARY).parent_path().parent_path() / "tests" / "match-batch-catalog.sqlite").string();
+  }
 
   TempDir dir;
   fs::path photos() const { return dir / "photos"; }

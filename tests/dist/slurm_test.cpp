@@ -123,7 +123,7 @@ TEST(Slurm, ShardArrayMergesToTheSingleProcessBuildAndAKilledTaskIsRequeued) {
     killed = true;
   }
   ASSERT_TRUE(killed) << "shard 2 never saved a shader";
-  ASSERT_TRUE(cluster.wait(ids[0] + "," + ids[1], 80, dir.path())) << "jobs still queued after 80 s";
+  ASSERT_TRUE(cluster.wait(ids[0] + "," + ids[1], 150, dir.path())) << "jobs still queued after 150 s";
   const std::string log2 = testing::read_text(run / "logs" / "shard-2.log");
   EXPECT_NE(log2.find("requeueing shard 2/3"), std::string::npos) << log2;
   EXPECT_NE(log2.find("restart 1"), std::string::npos) << "the requeued task ran again: " << log2;
@@ -179,7 +179,7 @@ TEST(Slurm, ShardArrayMergesToTheSingleProcessBuildAndAKilledTaskIsRequeued) {
   ASSERT_EQ(msub.code, 0) << msub.err;
   const auto mids = split_ws(msub.out);
   ASSERT_EQ(mids.size(), 2u) << msub.out;
-  ASSERT_TRUE(cluster.wait(mids[0] + "," + mids[1], 60, dir.path())) << "match jobs still queued after 60 s";
+  ASSERT_TRUE(cluster.wait(mids[0] + "," + mids[1], 120, dir.path())) << "match jobs still queued after 120 s";
   const auto index = nlohmann::json::parse(testing::read_text(dir / "matches" / "index.json"));
   ASSERT_EQ(index["photos"].size(), 4u) << index.dump();
   for (const auto& p : index["photos"]) {
