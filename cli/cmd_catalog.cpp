@@ -79,6 +79,10 @@ void run_build(const BuildCli& c, const GlobalOptions& global) {
   std::printf("%s: %d built, %zu unchanged, shard %s, seed %llu, %s\n", r.db.string().c_str(), built,
               r.shaders.size() - built, r.shard.str().c_str(), static_cast<unsigned long long>(r.seed),
               format_seconds(r.seconds).c_str());
+  if (r.shard.count > 1 && r.plan.is_object())
+    std::printf("shard %s: planned cost %.4g of %.4g (slowest shard / mean %.3f, costs: %s)\n", r.shard.str().c_str(),
+                r.plan["shards"][r.shard.index - 1]["load"].get<double>(), r.plan["total"].get<double>(),
+                r.plan["balance"].get<double>(), r.plan["cost_source"].get<std::string>().c_str());
 }
 
 }  // namespace
