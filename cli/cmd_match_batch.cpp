@@ -156,6 +156,7 @@ void write_index(const fs::path& out_dir, const std::string& stem, const std::ve
 }  // namespace
 
 void add_match_batch_options(CLI::App& match, MatchBatchCli& batch) {
+  batch.match = &match;
   auto* g = match.add_option_group("Batch", "Many photos: give a folder or a list file (.txt: one path per line) as PHOTO");
   g->add_option("--out-dir", batch.out_dir,
                 "Batch: folder of the per-photo result JSONs and the index (index.csv, index.json); default ./proctex-match");
@@ -215,6 +216,11 @@ void run_match_batch(const std::string& input, const std::string& crop, const st
                      const search::MatchOptions& options, const MatchBatchCli& batch, bool json,
                      const GlobalOptions& global) {
   const catalog::Shard shard = catalog::Shard::parse(batch.shard);
+  if (batch.match)
+    for (const char* single : {"--output", "--render", "--compare"})
+      if (batch.match->count(single) > 0)
+        throw UsageError(std::string(single) + " is for one photo; a batch writes one result JSON per photo",
+                         "drop " + std::string(single) + ": the results go to --out-dir");
   const fs::path out_dir = batch.out_dir.empty() ? fs::path("proctex-match") : fs::path(batch.out_dir);
   const auto all = list_batch_photos(input, out_dir);
   if (all.empty()) throw UsageError("no photos in '" + input + "'", "a folder of PNG/JPEG/TIFF/EXR files or a .txt list");

@@ -21,6 +21,7 @@ struct MatchBatchCli {
   std::string out_dir;       // --out-dir (default: ./proctex-match)
   std::string shard = "1/1";  // --shard i/n over the sorted photo list
   bool force = false;        // --force: redo photos whose result is current
+  CLI::App* match = nullptr;  // the match command (set by add_match_batch_options): single-photo options given?
 };
 
 // Adds --out-dir, --shard, --force (and a footer paragraph) to `proctex match`.

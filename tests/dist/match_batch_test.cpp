@@ -160,6 +160,9 @@ TEST_F(MatchBatch, BadBatchInputsAreOneLineErrors) {
   r = batch(photos().string(), " --shard 3/2");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--shard"), std::string::npos) << r.err;
+  r = batch(photos().string(), " --render '" + (dir / "r.png").string() + "'");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--render is for one photo"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "index.csv"));
 }
 
