@@ -9,6 +9,8 @@
 #include <sstream>
 #include <thread>
 
+#include <sys/resource.h>
+
 #include "catalog/thumbnail.h"
 #include "core/error.h"
 #include "core/version.h"
@@ -21,6 +23,12 @@ namespace fs = std::filesystem;
 namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+// Process CPU time (every thread: feature workers and the PoCL device threads), seconds.
+double cpu_now() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
 int resolve_jobs(int jobs) { return jobs > 0 ? jobs : std::max(1u, std::thread::hardware_concurrency()); }
 }  // namespace
 
@@ -48,13 +56,9 @@ Shard Shard::parse(const std::string& text) {
   return s;
 }
 
-std::vector<std::string> shard_shaders(std::vector<std::string> names, const Shard& shard) {
-  std::sort(names.begin(), names.end());
-  names.erase(std::unique(names.begin(), names.end()), names.end());
-  std::vector<std::string> out;
-  for (size_t p = 0; p < names.size(); ++p)
-    if (static_cast<int>(p % shard.count) == shard.index - 1) out.push_back(names[p]);
-  return out;
+std::vector<std::string> shard_shaders(std::vector<std::string> names, const Shard& shard,
+                                       const std::map<std::string, double>& measured) {
+  return plan_shards(names, shard.count, resolve_costs(names, measured)).shards.at(shard.index - 1);
 }
 
 std::vector<std::string> select_shaders(const ShaderLibrary& library, const std::string& list) {
@@ -74,6 +78,10 @@ std::vector<std::string> select_shaders(const ShaderLibrary& library, const std:
 nlohmann::json BuildReport::to_json() const {
   nlohmann::json j = {{"db", db.string()}, {"shard", shard.str()}, {"seed", seed}, {"seconds", seconds},
                       {"device", device}, {"shaders", nlohmann::json::array()}};
+  if (!plan.is_null())
+    j["plan"] = {{"count", plan["count"]}, {"balance", plan["balance"]}, {"hash", plan["hash"]},
+                 {"cost_source", plan["cost_source"]}, {"load", plan["shards"][shard.index - 1]["load"]},
+                 {"slowest", plan["slowest"]}, {"total", plan["total"]}};
   for (const auto& r : shaders) {
     nlohmann::json s = {{"shader", r.shader}, {"status", r.status}, {"reason", r.reason}, {"seconds", r.seconds},
                         {"samples", r.samples}};
@@ -88,9 +96,14 @@ BuildReport build(const BuildOptions& o, const std::function<void(const BuildEve
                   const ShaderLibrary& library) {
   const auto t0 = Clock::now();
   o.settings.validate();
-  std::vector<std::string> names = o.shaders.empty() ? library.names() : o.shaders;
-  for (const auto& n : names) library.get(n);  // unknown names: UsageError before touching the file
-  names = shard_shaders(names, o.shard);
+  std::vector<std::string> selected = o.shaders.empty() ? library.names() : o.shaders;
+  for (const auto& n : selected) library.get(n);  // unknown names: UsageError before touching the file
+  std::sort(selected.begin(), selected.end());
+  selected.erase(std::unique(selected.begin(), selected.end()), selected.end());
+  const ShaderCosts costs = resolve_costs(selected, o.costs.empty() ? std::map<std::string, double>{} : read_costs(o.costs),
+                                          o.costs.empty() ? "" : o.costs.filename().string());
+  const ShardPlan plan = plan_shards(selected, o.shard.count, costs);
+  std::vector<std::string> names = plan.shards.at(o.shard.index - 1);
   const int jobs = resolve_jobs(o.jobs);
 
   Store store(o.db, Store::Access::Write);
@@ -98,6 +111,7 @@ BuildReport build(const BuildOptions& o, const std::function<void(const BuildEve
   report.db = o.db;
   report.shard = o.shard;
   report.seed = o.seed;
+  report.plan = plan.to_json();
   const std::string settings_hash = o.settings.hash(o.seed);
 
   // Decide first (cheap), so progress knows how many shaders will really be built.
@@ -130,13 +144,19 @@ BuildReport build(const BuildOptions& o, const std::function<void(const BuildEve
   Renderer renderer(library);
   const std::string device = ocl::Runtime::instance().device().name;
   report.device = device;
+  // What `catalog merge` checks across shard files: the whole plan (so a missing shard can be
+  // named), and the source of every selected shader (shards from different checkouts differ here).
+  nlohmann::json sources = nlohmann::json::object();
+  for (const auto& n : selected) sources[n] = library.get(n).source_hash;
   const int64_t build_id = store.begin_build({{"command", "build"}, {"seed", o.seed}, {"settings", o.settings.to_json()},
                                               {"shard", o.shard.str()}, {"shaders", names}, {"jobs", jobs},
-                                              {"proctex_version", kVersion}, {"device", device}});
+                                              {"proctex_version", kVersion}, {"device", device},
+                                              {"plan", report.plan}, {"sources", sources}});
   for (size_t i = 0; i < todo.size(); ++i) {
     const auto& [name, why] = todo[i];
     const ShaderDecl& decl = library.get(name);
     const auto ts = Clock::now();
+    const double cpu0 = cpu_now();
     auto on_progress = [&, i](const SamplingProgress& p) {
       if (progress) progress({name, static_cast<int>(i), static_cast<int>(todo.size()), p.stage, p.fraction});
     };
@@ -150,7 +170,8 @@ BuildReport build(const BuildOptions& o, const std::function<void(const BuildEve
                   e.hint().empty() ? "shaders built before this one are saved; rerun to continue" : e.hint());
     }
     const double seconds = since(ts);
-    store.write(cat, device, seconds);  // one transaction: the shader appears complete or not at all
+    const double cpu = cpu_now() - cpu0;
+    store.write(cat, device, seconds, cpu);  // one transaction: the shader appears complete or not at all
     ShaderResult r;
     r.shader = name;
     r.status = why == "new" ? "built" : "rebuilt";
@@ -174,8 +195,156 @@ nlohmann::json MergeReport::to_json() const {
           {"linked", linked},       {"linked_before", linked_before}, {"jump_edges", jump_edges}};
 }
 
-MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs) {
+namespace {
+
+// One merge participant as the agreement checks see it.
+struct Participant {
+  fs::path path;
+  std::vector<ShaderSummary> shaders;
+  nlohmann::json build;  // the file's last `catalog build` row (null: none, e.g. a merged file)
+};
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+std::string value_text(const nlohmann::json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
+
+// First difference between two shaders' build settings: {what, value in b, value in a}; empty
+// `what` when they agree.
+struct Difference {
+  std::string what, b, a;
+};
+Difference settings_difference(const ShaderSummary& a, const ShaderSummary& b) {
+  if (a.seed != b.seed) return {"seed", std::to_string(b.seed), std::to_string(a.seed)};
+  if (a.metric != b.metric) return {"metric", b.metric, a.metric};
+  if (a.metric_version != b.metric_version)
+    return {"metric version (" + a.metric + ")", std::to_string(b.metric_version), std::to_string(a.metric_version)};
+  std::set<std::string> keys;
+  for (const auto* j : {&a.settings, &b.settings})
+    if (j->is_object())
+      for (const auto& [k, v] : j->items()) keys.insert(k);
+  keys.erase("batch");  // launch size: not part of the settings hash, results are identical
+  for (const auto& k : keys) {
+    const nlohmann::json va = a.settings.is_object() && a.settings.contains(k) ? a.settings[k] : nlohmann::json();
+    const nlohmann::json vb = b.settings.is_object() && b.settings.contains(k) ? b.settings[k] : nlohmann::json();
+    if (va != vb) return {"setting " + k, value_text(vb), value_text(va)};
+  }
+  return {};
+}
+
+void check_agreement(const std::vector<Participant>& parts) {
+  const std::string hint =
+      "build every shard with the same proctex checkout, --seed and settings (--allow-mixed merges anyway; nothing was "
+      "merged)";
+  // Settings, seeds, metric versions: every shader against the first shader seen.
+  const ShaderSummary* ref = nullptr;
+  const Participant* ref_part = nullptr;
+  for (const auto& p : parts)
+    for (const auto& s : p.shaders) {
+      if (!ref) {
+        ref = &s;
+        ref_part = &p;
+        continue;
+      }
+      const Difference d = settings_difference(*ref, s);
+      if (!d.what.empty())
+        throw Error("cannot merge: " + quoted(p.path) + " (shader '" + s.name + "') was built with " + d.what + " = " +
+                        d.b + ", " + quoted(ref_part->path) + " (shader '" + ref->name + "') with " + d.a,
+                    hint);
+    }
+  // Shader sources: wherever two files know a shader (its rows, or the sources a build recorded).
+  auto known_sources = [](const Participant& p) {
+    std::map<std::string, std::string> m;
+    if (p.build.is_object() && p.build.contains("sources") && p.build["sources"].is_object())
+      for (const auto& [k, v] : p.build["sources"].items()) m[k] = v.get<std::string>();
+    for (const auto& s : p.shaders) m[s.name] = s.source_hash;  // the rows are what was built
+    return m;
+  };
+  std::vector<std::map<std::string, std::string>> sources;
+  for (const auto& p : parts) sources.push_back(known_sources(p));
+  for (size_t b = 1; b < parts.size(); ++b)
+    for (size_t a = 0; a < b; ++a)
+      for (const auto& [name, hash] : sources[b]) {
+        const auto it = sources[a].find(name);
+        if (it != sources[a].end() && it->second != hash)
+          throw Error("cannot merge: " + quoted(parts[b].path) + " was built from a different source of shader '" + name +
+                          "' than " + quoted(parts[a].path) + " (source hash " + hash + " vs " + it->second + ")",
+                      hint);
+      }
+}
+
+void check_shards_complete(const std::vector<Participant>& inputs) {
+  const std::string hint = "merge all n shard files of one build (--allow-partial merges what is there)";
+  const Participant* first = nullptr;
+  std::map<int, const Participant*> have;
+  for (const auto& p : inputs) {
+    if (!p.build.is_object() || !p.build.contains("plan") || !p.build["plan"].is_object()) continue;
+    const Shard shard = Shard::parse(p.build.value("shard", std::string("1/1")));
+    if (shard.count < 2) continue;
+    if (!p.build.value("finished", false))
+      throw Error("cannot merge: " + quoted(p.path) + " (shard " + shard.str() + ") did not finish its build",
+                  "the job was killed or failed: rerun the same 'proctex catalog build --shard " + shard.str() +
+                      "' command on that file, it continues where it stopped");
+    if (!first) {
+      first = &p;
+    } else {
+      const auto& fp = first->build["plan"];
+      const auto& pp = p.build["plan"];
+      if (fp["count"] != pp["count"])
+        throw Error("cannot merge: " + quoted(p.path) + " is shard " + shard.str() + " but " + quoted(first->path) +
+                        " is shard " + first->build.value("shard", std::string()) + ": shards of different splits",
+                    hint);
+      if (fp["hash"] != pp["hash"])
+        throw Error("cannot merge: " + quoted(p.path) + " and " + quoted(first->path) +
+                        " were split differently (shard plans " + value_text(pp["hash"]) + " vs " + value_text(fp["hash"]) +
+                        ", cost sources " + value_text(pp["cost_source"]) + " vs " + value_text(fp["cost_source"]) + ")",
+                    "give every shard the same --shaders and --costs");
+    }
+    if (have.count(shard.index)) continue;  // the same shard twice: its shaders are conflict-checked below
+    have[shard.index] = &p;
+  }
+  if (!first) return;
+  const auto& plan = first->build["plan"];
+  const int n = plan["count"].get<int>();
+  for (int i = 1; i <= n; ++i) {
+    if (have.count(i)) continue;
+    std::string shaders;
+    for (const auto& s : plan["shards"][i - 1]["shaders"]) shaders += (shaders.empty() ? "" : ", ") + s.get<std::string>();
+    std::string got;
+    for (const auto& [k, p] : have) got += (got.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(n) + " " + quoted(p->path);
+    throw Error("cannot merge: shard " + std::to_string(i) + "/" + std::to_string(n) + " is missing (it builds " +
+                    shaders + "); got " + got,
+                hint);
+  }
+}
+
+Participant participant(const fs::path& path) {
+  Participant p;
+  p.path = path;
+  Store s(path, Store::Access::Read);
+  p.shaders = s.shaders();
+  for (const auto& b : s.builds())
+    if (b.value("command", std::string()) == "build" && b["info"].is_object()) {
+      p.build = b["info"];
+      p.build["finished"] = !b["finished_at"].is_null();
+    }
+  return p;
+}
+
+}  // namespace
+
+MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs, const MergeOptions& options) {
   if (inputs.empty()) throw UsageError("catalog merge needs at least one input", "proctex catalog merge OUT IN...");
+  {
+    std::error_code ec0;
+    std::vector<Participant> parts;
+    if (fs::exists(out, ec0)) parts.push_back(participant(out));
+    const size_t first_input = parts.size();
+    for (const auto& in : inputs)
+      if (!(fs::exists(out, ec0) && fs::equivalent(in, out, ec0))) parts.push_back(participant(in));
+    if (!options.allow_mixed) check_agreement(parts);
+    if (!options.allow_partial)
+      check_shards_complete(std::vector<Participant>(parts.begin() + static_cast<long>(first_input), parts.end()));
+  }
   struct Source {
     fs::path path;
     ShaderSummary summary;
@@ -228,7 +397,7 @@ MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs) {
       auto& s = open[src.path];
       if (!s) s = std::make_unique<Store>(src.path, Store::Access::Read);
       const ShaderCatalogue cat = s->load(name);
-      dst.write(cat, src.summary.device, src.summary.build_seconds);
+      dst.write(cat, src.summary.device, src.summary.build_seconds, src.summary.cpu_seconds);
       report.added.push_back(name);
     }
     // Jump edges: a file's edges join two of its own shaders (foreign keys), every shader of every

@@ -10,6 +10,7 @@
 //   catalog::ShaderCatalogue bricks = store.load("bricks");
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "catalog/sampling.h"
+#include "catalog/shard.h"
 #include "catalog/store.h"
 #include "image/image.h"
 #include "shaders/library.h"
@@ -28,16 +30,19 @@ namespace proctex::catalog {
 // ./proctex-catalog.sqlite. `proctex match` and `proctex morph` read the same file.
 std::filesystem::path default_catalog_path();
 
-// CI sharding: "i/n" with 1 <= i <= n. The selected shaders, sorted by name, go round-robin:
-// shader at sorted position p belongs to shard (p mod n) + 1. Every shader's samples depend only on
-// the seed, its source and the settings, so the shards' union equals a full build.
+// CI sharding: "i/n" with 1 <= i <= n. The selected shaders are split by their build cost
+// (catalog/shard.h: measured costs from --costs, else the committed table), so the slowest shard
+// takes about total/n. Every shader's samples depend only on the seed, its source and the
+// settings, so the shards' union equals a full build.
 struct Shard {
   int index = 1;
   int count = 1;
   static Shard parse(const std::string& text);  // UsageError on a bad form
   std::string str() const { return std::to_string(index) + "/" + std::to_string(count); }
 };
-std::vector<std::string> shard_shaders(std::vector<std::string> names, const Shard& shard);
+// The shaders of `shard`: plan_shards(names, n, resolve_costs(names, measured)).shards[i - 1].
+std::vector<std::string> shard_shaders(std::vector<std::string> names, const Shard& shard,
+                                       const std::map<std::string, double>& measured = {});
 // "all" (or empty) -> every library shader; "a,b" -> those, checked (UsageError names close matches).
 std::vector<std::string> select_shaders(const ShaderLibrary& library, const std::string& list);
 
@@ -49,6 +54,9 @@ struct BuildOptions {
   Shard shard;
   int jobs = 0;        // feature threads; 0 = hardware concurrency
   bool force = false;  // rebuild even when unchanged
+  // Measured costs that balance the shards (a previous catalogue or a JSON file; read_costs()).
+  // Empty: the committed table. Every shard of one build must get the same file.
+  std::filesystem::path costs;
 };
 
 struct BuildEvent {
@@ -76,6 +84,7 @@ struct BuildReport {
   std::vector<ShaderResult> shaders;
   double seconds = 0;
   std::string device;
+  nlohmann::json plan;  // ShardPlan::to_json() of the split this shard belongs to
   nlohmann::json to_json() const;
 };
 
@@ -98,7 +107,18 @@ struct MergeReport {
 // Jump edges come along: every pair an input links is linked in `out` too (both its shaders are in
 // `out` afterwards, with the content the edges were found from). A pair `out` already links keeps
 // its edges; otherwise the first input (in order) that links the pair gives them.
-MergeReport merge(const std::filesystem::path& out, const std::vector<std::filesystem::path>& inputs);
+//
+// Before anything is written, the inputs (and OUT's shaders) must agree: the same seed, sampling
+// settings, metric and metric version in every shader, and the same shader sources wherever two
+// files know a shader (shard builds record every selected shader's source). When the inputs are
+// shards of one n-shard build, all n must be there, from one plan, each with a finished build.
+// Otherwise proctex::Error naming the first difference or the missing shard (and its shaders).
+struct MergeOptions {
+  bool allow_mixed = false;    // skip the settings / seed / metric / source agreement check
+  bool allow_partial = false;  // skip the shard completeness check
+};
+MergeReport merge(const std::filesystem::path& out, const std::vector<std::filesystem::path>& inputs,
+                  const MergeOptions& options = {});
 
 // Per shader: samples, pruned size, coverage, build time, staleness against the current library.
 nlohmann::json info(const std::filesystem::path& db, const ShaderLibrary& library = ShaderLibrary::builtin());

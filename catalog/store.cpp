@@ -113,6 +113,16 @@ CREATE TABLE jumps (
 CREATE INDEX jumps_a ON jumps(shader_a);
 CREATE INDEX jumps_b ON jumps(shader_b);
 )sql",
+    // 2 -> 3: the measured build cost per shader, which balances `catalog build --shard i/n`
+    // (catalog/shard.h). Its own table, so v1/v2 readers' queries are untouched; IF NOT EXISTS so a
+    // file whose user_version was lowered by hand migrates again without an error.
+    R"sql(
+CREATE TABLE IF NOT EXISTS shader_costs (
+  shader_id    INTEGER PRIMARY KEY REFERENCES shaders(id) ON DELETE CASCADE,
+  cpu_seconds  REAL NOT NULL,       -- process CPU time of the build (all threads): load-independent
+  wall_seconds REAL NOT NULL        -- the same as shaders.build_seconds
+);
+)sql",
 };
 static_assert(std::size(kMigrations) == kSchemaVersion);
 
@@ -205,6 +215,13 @@ const char* kSummaryColumns =
     "name, family, source_hash, settings_hash, content_hash, mode, metric, metric_version, resolution, seed, "
     "settings, stats, coverage, sample_count, pruned_count, device, proctex_version, build_seconds, built_at";
 
+// The summary columns plus the measured CPU cost (schema v3; NULL for older files read as they are).
+std::string summary_select(int version) {
+  return std::string("SELECT ") + kSummaryColumns +
+         (version >= 3 ? ", (SELECT cpu_seconds FROM shader_costs c WHERE c.shader_id = shaders.id)" : ", NULL") +
+         " FROM shaders";
+}
+
 ShaderSummary read_summary(sql::Statement& s) {
   ShaderSummary r;
   r.name = s.column_text(0);
@@ -236,6 +253,7 @@ ShaderSummary read_summary(sql::Statement& s) {
   r.proctex_version = s.column_text(16);
   r.build_seconds = s.column_double(17);
   r.built_at = s.column_text(18);
+  r.cpu_seconds = s.is_null(19) ? -1.0 : s.column_double(19);
   return r;
 }
 
@@ -243,13 +261,13 @@ ShaderSummary read_summary(sql::Statement& s) {
 
 std::vector<ShaderSummary> Store::shaders() {
   std::vector<ShaderSummary> out;
-  auto s = db_->prepare(std::string("SELECT ") + kSummaryColumns + " FROM shaders ORDER BY name");
+  auto s = db_->prepare(summary_select(schema_version()) + " ORDER BY name");
   while (s.step()) out.push_back(read_summary(s));
   return out;
 }
 
 std::optional<ShaderSummary> Store::summary(const std::string& shader) {
-  auto s = db_->prepare(std::string("SELECT ") + kSummaryColumns + " FROM shaders WHERE name = ?1");
+  auto s = db_->prepare(summary_select(schema_version()) + " WHERE name = ?1");
   s.bind(1, shader);
   if (!s.step()) return std::nullopt;
   return read_summary(s);
@@ -313,7 +331,7 @@ ShaderCatalogue Store::load(const std::string& shader, bool with_edges) {
   return cat;
 }
 
-void Store::write(const ShaderCatalogue& cat, const std::string& device, double seconds) {
+void Store::write(const ShaderCatalogue& cat, const std::string& device, double seconds, double cpu_seconds) {
   sql::Transaction t(*db_);
   remove(cat.shader);
   const auto& m = cat.samples.empty() ? metrics::Features{} : cat.samples.front().features;
@@ -333,6 +351,11 @@ void Store::write(const ShaderCatalogue& cat, const std::string& device, double 
       .bind(17, device).bind(18, kVersion).bind(19, seconds).bind(20, now_utc());
   ins.run();
   const int64_t id = db_->scalar_int("SELECT last_insert_rowid()");
+  if (cpu_seconds >= 0) {
+    auto cost = db_->prepare("INSERT INTO shader_costs (shader_id, cpu_seconds, wall_seconds) VALUES (?1, ?2, ?3)");
+    cost.bind(1, id).bind(2, cpu_seconds).bind(3, seconds);
+    cost.run();
+  }
 
   auto smp = db_->prepare("INSERT INTO samples (shader_id, idx, unit, packed, seed, smoothness, thumbnail) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   auto feat = db_->prepare("INSERT INTO features (shader_id, idx, metric, version, resolution, vector) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
@@ -376,6 +399,11 @@ void Store::remove(const std::string& shader) {
   auto j = db_->prepare("DELETE FROM jumps WHERE shader_a = ?1 OR shader_b = ?1");
   j.bind(1, id);
   j.run();
+  if (schema_version() >= 3) {
+    auto c = db_->prepare("DELETE FROM shader_costs WHERE shader_id = ?1");
+    c.bind(1, id);
+    c.run();
+  }
   for (const char* table : {"edges", "graph_members", "features", "samples", "shaders"}) {
     auto d = db_->prepare(std::string("DELETE FROM ") + table + (std::string(table) == "shaders" ? " WHERE id = ?1" : " WHERE shader_id = ?1"));
     d.bind(1, id);

@@ -19,9 +19,10 @@
 
 namespace proctex::catalog {
 
-inline constexpr int kSchemaVersion = 2;
-// Oldest schema a reader accepts without migrating (v2 only added the jumps table, so a v1 file is
-// read as a catalogue without jump edges; opening it for writing migrates it).
+inline constexpr int kSchemaVersion = 3;
+// Oldest schema a reader accepts without migrating (v2 only added the jumps table, v3 the
+// shader_costs table, so a v1 file is read as a catalogue without jump edges or measured costs;
+// opening it for writing migrates it).
 inline constexpr int kMinReadableVersion = 1;
 inline constexpr int kApplicationId = 0x50545843;  // "PTXC"
 
@@ -38,6 +39,7 @@ struct ShaderSummary {
   int samples = 0, pruned = 0;
   uint64_t seed = 0;
   double build_seconds = 0;
+  double cpu_seconds = -1;  // measured CPU seconds of the build (schema v3); -1: not recorded
   std::optional<Coverage> coverage;
   nlohmann::json settings, stats;
 };
@@ -74,8 +76,9 @@ class Store {
   // The complete shader catalogue (samples, features, edges, graphs); throws if absent.
   ShaderCatalogue load(const std::string& shader, bool with_edges = true);
 
-  // Replaces the shader's rows in one transaction.
-  void write(const ShaderCatalogue& cat, const std::string& device, double seconds);
+  // Replaces the shader's rows in one transaction. cpu_seconds >= 0 records the measured build
+  // cost (shader_costs, schema v3) that balances shards.
+  void write(const ShaderCatalogue& cat, const std::string& device, double seconds, double cpu_seconds = -1);
   void remove(const std::string& shader);
 
   // Jump edges (schema v2). write_jumps replaces every jump edge of the pair {a, b} in one

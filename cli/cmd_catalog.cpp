@@ -32,7 +32,7 @@ std::string fmt_cov(const std::optional<catalog::Coverage>& c) {
 }
 
 struct BuildCli {
-  std::string db, shaders = "all", shard = "1/1", mode = "adaptive";
+  std::string db, shaders = "all", shard = "1/1", mode = "adaptive", costs;
   int samples = 200, jobs = 0, resolution = 256, probes = -1;
   uint64_t seed = 1;
   std::vector<std::string> set;
@@ -46,6 +46,7 @@ void run_build(const BuildCli& c, const GlobalOptions& global) {
   o.jobs = c.jobs;
   o.force = c.force;
   o.shard = catalog::Shard::parse(c.shard);
+  o.costs = c.costs;
   o.settings.samples = c.samples;
   o.settings.mode = c.mode;
   o.settings.resolution = c.resolution;
@@ -78,6 +79,10 @@ void run_build(const BuildCli& c, const GlobalOptions& global) {
   std::printf("%s: %d built, %zu unchanged, shard %s, seed %llu, %s\n", r.db.string().c_str(), built,
               r.shaders.size() - built, r.shard.str().c_str(), static_cast<unsigned long long>(r.seed),
               format_seconds(r.seconds).c_str());
+  if (r.shard.count > 1 && r.plan.is_object())
+    std::printf("shard %s: planned cost %.4g of %.4g (slowest shard / mean %.3f, costs: %s)\n", r.shard.str().c_str(),
+                r.plan["shards"][r.shard.index - 1]["load"].get<double>(), r.plan["total"].get<double>(),
+                r.plan["balance"].get<double>(), r.plan["cost_source"].get<std::string>().c_str());
 }
 
 }  // namespace
@@ -101,7 +106,11 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
   build->add_option("--shaders", b->shaders, "comma-separated shader names, or all")->capture_default_str();
   build->add_option("--samples,-n", b->samples, "samples kept per shader (N in the thesis)")->capture_default_str();
   build->add_option("--seed", b->seed, "seed of every random choice (same seed + sources = same samples)")->capture_default_str();
-  build->add_option("--shard", b->shard, "build shard i of n (1-based), e.g. 3/8")->capture_default_str();
+  build->add_option("--shard", b->shard, "build shard i of n (1-based), e.g. 3/8; shards are balanced by build cost")
+      ->capture_default_str();
+  build->add_option("--costs", b->costs,
+                    "measured build costs that balance --shard: a previous catalogue or a JSON {\"shader\": seconds}\n"
+                    "file, the same for every shard (default: the committed table, see 'proctex catalog plan')");
   build->add_option("--jobs,-j", b->jobs, "threads for feature extraction (0 = all cores)")->capture_default_str();
   build->add_option("--mode", b->mode, "adaptive (thesis 4.3) or uniform (baseline)")->capture_default_str();
   build->add_option("--resolution", b->resolution, "render/analysis size of stored samples")->capture_default_str();
@@ -115,18 +124,65 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
   // merge
   auto merge_args = std::make_shared<std::vector<std::string>>();
   auto merge_json = std::make_shared<bool>(false);
+  auto merge_opts = std::make_shared<catalog::MergeOptions>();
   CLI::App* merge = cat->add_subcommand(
       "merge", "Merge catalogue files (CI shards) into OUT (created if missing). The same shader with different\n"
                "content in two inputs is a conflict: an error, and OUT is left unchanged. Jump edges (catalog link)\n"
-               "come along; a shader pair OUT already links keeps its edges.");
+               "come along; a shader pair OUT already links keeps its edges.\n"
+               "Refused before anything is written: inputs built with different settings, seeds, metric versions or\n"
+               "shader sources (the first difference is named), and an incomplete set of shards of one --shard i/n\n"
+               "build (the missing shard and its shaders are named).");
   merge->add_option("files", *merge_args, "OUT IN...")->required()->expected(2, -1);
   merge->add_flag("--json", *merge_json, "machine-readable report on stdout");
-  merge->callback([merge_args, merge_json] {
+  merge->add_flag("--allow-mixed", merge_opts->allow_mixed, "merge inputs built with different settings, seeds or sources");
+  merge->add_flag("--allow-partial", merge_opts->allow_partial, "merge an incomplete set of shards");
+  merge->callback([merge_args, merge_json, merge_opts] {
     std::vector<fs::path> inputs(merge_args->begin() + 1, merge_args->end());
-    const auto r = catalog::merge(merge_args->front(), inputs);
+    const auto r = catalog::merge(merge_args->front(), inputs, *merge_opts);
     if (*merge_json) return print_json(r.to_json());
     std::printf("%s: %zu shaders added, %zu already present, %zu shader pairs' jump edges copied (%d edges), from %d inputs\n",
                 r.out.string().c_str(), r.added.size(), r.unchanged.size(), r.linked.size(), r.jump_edges, r.inputs);
+  });
+
+  // plan
+  struct PlanCli {
+    std::string shaders = "all", costs;
+    std::vector<int> counts = {4};
+    bool json = false;
+  };
+  auto pc = std::make_shared<PlanCli>();
+  CLI::App* plan = cat->add_subcommand(
+      "plan", "Show how 'catalog build --shard i/n' splits the shaders: per shard its shaders and summed build cost,\n"
+              "and the balance (slowest shard / mean; 1 is perfect). Costs: --costs (a previous catalogue's measured\n"
+              "CPU seconds, or JSON) else the committed table of measured build times.");
+  plan->add_option("--shards,-n", pc->counts, "shard counts n (several: one plan each)")->capture_default_str()->check(
+      CLI::Range(1, 100000));
+  plan->add_option("--shaders", pc->shaders, "comma-separated shader names, or all")->capture_default_str();
+  plan->add_option("--costs", pc->costs, "measured costs: a catalogue or a JSON {\"shader\": seconds} file");
+  plan->add_flag("--json", pc->json, "machine-readable plans on stdout");
+  plan->callback([pc] {
+    const auto names = catalog::select_shaders(ShaderLibrary::builtin(), pc->shaders);
+    const auto costs = catalog::resolve_costs(names, pc->costs.empty() ? std::map<std::string, double>{} : catalog::read_costs(pc->costs),
+                                              pc->costs);
+    nlohmann::json all = nlohmann::json::array();
+    for (int n : pc->counts) {
+      const auto p = catalog::plan_shards(names, n, costs);
+      if (pc->json) {
+        all.push_back(p.to_json());
+        all.back()["costs"] = costs.to_json();  // per shader: cost and where it came from
+        continue;
+      }
+      std::vector<std::vector<std::string>> rows = {{"shard", "cost", "shaders"}};
+      for (int i = 0; i < n; ++i) {
+        std::string list;
+        for (const auto& s : p.shards[i]) list += (list.empty() ? "" : ",") + s;
+        rows.push_back({std::to_string(i + 1) + "/" + std::to_string(n), fmt::format("{:.4g}", p.load[i]), list});
+      }
+      print_table(rows);
+      std::printf("n = %d: total %.4g, mean %.4g, slowest %.4g, balance %.3f (slowest / mean), costs: %s\n\n", n, p.total,
+                  p.total / n, p.slowest(), p.balance(), p.cost_source.c_str());
+    }
+    if (pc->json) print_json(pc->counts.size() == 1 ? all[0] : all);
   });
 
   // info

@@ -9,6 +9,7 @@
 #include "catalog/catalog.h"
 #include "catalog/store.h"
 #include "cli/commands.h"
+#include "cli/match_batch.h"
 #include "cli/output.h"
 #include "core/error.h"
 #include "search/match.h"
@@ -41,6 +42,7 @@ struct MatchCliOptions {
   int starts = search::MatchOptions{}.starts;
   long max_evaluations = search::MatchOptions{}.refine.max_evaluations;
   bool json = false;
+  MatchBatchCli batch;  // a folder or list of photos (cli/match_batch.h)
 };
 
 // A similarity as printed next to its verdict: rounded down, so 0.4996 reads 0.499 beside
@@ -128,6 +130,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   options.refine.max_evaluations = o.max_evaluations;
   options.budget = parse_budget(o.budget);
   options.fixed = parse_fixed(o.fix);
+  if (is_match_batch(o.photo, o.batch)) return run_match_batch(o.photo, o.crop, o.db, options, o.batch, o.json, global);
 
   const Image target = search::prepare_target(o.photo, o.crop);
   const std::filesystem::path db = o.db.empty() ? catalog::default_catalog_path() : std::filesystem::path(o.db);
@@ -200,6 +203,7 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--size", o->size, "Size of --render and --compare images")->capture_default_str()->check(CLI::Range(16, 65536));
   cmd->add_option("--compare", o->compare, "Write target and match side by side");
   cmd->add_flag("--json", o->json, "Print the match result as JSON");
+  add_match_batch_options(*cmd, o->batch);
   cmd->callback([o, &global] { run(*o, global); });
 }
 

@@ -12,7 +12,10 @@ packages=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libeigen3-dev
   libgtest-dev googletest libbenchmark-dev
   fonts-dejavu-core
+  slurm-wlm munge nodejs
 )
+# npm: a separate package with Debian's nodejs, part of NodeSource's nodejs.
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 if [[ "${1:-}" == "--with-bench" ]]; then
   packages+=(hyperfine python3)  # python3: bench/realset/build.py (it fetches its own game-data .debs)
 fi

@@ -387,7 +387,7 @@ TEST_F(Transform, ConnectiveShaderCarriesRectangleToCircle) {
 TEST_F(Transform, JumpEdgesRoundTripAndGoWithARebuiltShader) {
   const fs::path p = copy_db("store.sqlite");
   catalog::Store store(p, catalog::Store::Access::Write);
-  EXPECT_EQ(store.schema_version(), 2);
+  EXPECT_EQ(store.schema_version(), catalog::kSchemaVersion);
   catalog::JumpEdge e;
   e.shader_a = "superellipse";  // given out of name order: stored as rectangle - superellipse
   e.shader_b = "rectangle";
