@@ -336,6 +336,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       if (obj.best().similarity > state.best) {
         state.best = obj.best().similarity;
         state.best_shader = lane.start.shader;
+        state.best_spec = spec_from_packed(*lane.decl, obj.best().packed, lane.start.sample->seed);
       }
       state.evaluations = evaluations + obj.evaluations() - before;
       report(stage);
