@@ -24,7 +24,7 @@ struct ServerOptions {
   int max_upload_dimension = 8192;    // per side of an uploaded image (checked before decoding)
   int64_t max_upload_pixels = int64_t(1) << 25;
   int max_render_size = 4096;         // per side of /api/render
-  int preview_size = 96;              // live preview side
+  int preview_size = 128;             // live preview side
 };
 
 // True for 127.0.0.0/8, ::1 and "localhost".
