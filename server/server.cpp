@@ -4,6 +4,7 @@
 #include <fstream>
 #include <mutex>
 #include <regex>
+#include <thread>
 
 #include <fmt/format.h>
 #include <httplib.h>
@@ -195,7 +196,15 @@ struct Server::Impl {
       if (!out) throw Error("cannot store the upload", "check the free space of the --data folder");
     }
     try {
-      Image img = load_image(tmp, upload_limits());
+      Image img;
+      try {
+        img = load_image(tmp, upload_limits());
+      } catch (const Error& e) {
+        // The message names the server's temporary file: keep only the reason.
+        std::string reason = e.message();
+        if (const size_t at = reason.find("': "); at != std::string::npos) reason = reason.substr(at + 3);
+        throw HttpError{400, what + " cannot be read: " + reason, e.hint()};
+      }
       if (std::min(img.width, img.height) < 32)
         throw HttpError{400, fmt::format("{} is {}x{} pixels; a texture needs at least 32 on each side", what, img.width, img.height),
                         "send a larger image"};
@@ -533,7 +542,8 @@ struct Server::Impl {
     const std::string id = job.id;
     auto live = runner->live(id);
     auto sent_version = std::make_shared<int>(-1);
-    res.set_chunked_content_provider("text/event-stream", [this, id, live, sent_version](size_t, httplib::DataSink& sink) {
+    auto last_sent = std::make_shared<Clock::time_point>();
+    res.set_chunked_content_provider("text/event-stream", [this, id, live, sent_version, last_sent](size_t, httplib::DataSink& sink) {
       auto send = [&](const std::string& event, const json& data) {
         const std::string text = "event: " + event + "\ndata: " + data.dump() + "\n\n";
         return sink.write(text.data(), text.size());
@@ -541,9 +551,12 @@ struct Server::Impl {
       if (live) {
         json data;
         bool finished;
+        // At most 10 events a second (a match reports every render batch), at least 4.
+        const auto next = *last_sent + std::chrono::milliseconds(100);
+        if (Clock::now() < next) std::this_thread::sleep_until(next);
         {
           std::unique_lock lock(live->mutex);
-          live->changed.wait_for(lock, std::chrono::milliseconds(250));
+          live->changed.wait_for(lock, std::chrono::milliseconds(150));
           finished = live->state != "queued" && live->state != "running";
           data = {{"state", live->state}, {"progress", live->progress}};
           if (live->preview_version != *sent_version && !live->preview_png.empty()) {
@@ -551,6 +564,7 @@ struct Server::Impl {
             *sent_version = live->preview_version;
           }
         }
+        *last_sent = Clock::now();
         if (!send("progress", data)) return false;
         if (!finished) return true;
       }
