@@ -12,7 +12,13 @@ packages=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libeigen3-dev
   libgtest-dev googletest libbenchmark-dev
   fonts-dejavu-core
+  libcpp-httplib-dev chromium
 )
+# proctex serve's browser test drives chromium with a pinned npm package: node and npm, from Debian
+# unless some other node (with its own npm) is installed already.
+if ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 if [[ "${1:-}" == "--with-bench" ]]; then
   packages+=(hyperfine)
 fi
