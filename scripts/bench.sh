@@ -24,4 +24,8 @@ if [[ -x "$build/bench/bench_morph" ]]; then
   echo "== $build/bench/bench_morph (120 frames at 512x512, builds a bricks catalogue first)"
   "$build/bench/bench_morph" --repetitions 3 --markdown "$results/morph.md"
 fi
+if [[ -x "$build/bench/bench_serve" && -f "$build/demo/catalog.sqlite" ]]; then
+  echo "== $build/bench/bench_serve (proctex serve: slider renders, first preview, service vs CLI; demo catalogue)"
+  "$build/bench/bench_serve" --db "$build/demo/catalog.sqlite" --markdown "$results/serve.md"
+fi
 echo "bench: tables in $results/"
