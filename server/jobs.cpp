@@ -297,7 +297,11 @@ nlohmann::json JobRunner::run_match(const JobRecord& job, LiveJob& live) {
     if (new_best && (force_preview || since(last_preview) >= options_.preview_interval)) {
       RenderSettings rs;
       rs.width = rs.height = options_.preview_size;
-      png = encode_png(renderer.render(p.best_spec, rs), tmp);
+      try {
+        png = encode_png(renderer.render(p.best_spec, rs), tmp);
+      } catch (const Error&) {
+        // A preview is a courtesy: it never fails the match (the result is rendered again below).
+      }
       preview_spec = p.best_spec.to_json();
       last_preview = Clock::now();
     }

@@ -51,7 +51,7 @@ try {
   console.log(`first live preview ${firstPreview.toFixed(2)} s after the upload`);
   await page.screenshot({ path: path.join(outDir, "match-live.png") });
   const stage = await page.$eval("#stage", e => e.textContent);
-  check(/race|refine|final|done/.test(stage), "the stage is shown while searching: " + stage);
+  check(/screened|race|refine|final|done/.test(stage), "the stage is shown while searching: " + stage);
 
   await page.waitForFunction(() => document.body.dataset.done === "1", { timeout: 120000 });
   const updates = await page.$eval("#preview", e => parseInt(e.dataset.updates || "0"));
