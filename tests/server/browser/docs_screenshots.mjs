@@ -9,7 +9,7 @@ const base = url.replace(/\/?$/, "/");
 const browser = await puppeteer.launch({ executablePath: chromium, headless: true,
                                          args: ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"] });
 const page = await browser.newPage();
-await page.setViewport({ width: 1200, height: 820 });
+await page.setViewport({ width: 1280, height: 820 });
 await page.goto(base, { waitUntil: "networkidle0" });
 await (await page.$("#file")).uploadFile(path.resolve(photo));
 await page.waitForFunction(() => parseInt(document.querySelector("#preview").dataset.updates || "0") >= 3, { timeout: 120000 });
