@@ -74,14 +74,38 @@ search::Budget parse_budget(const nlohmann::json& v) {
 
 }  // namespace
 
+std::array<int, 4> crop_from_json(const nlohmann::json& v) {
+  std::array<int, 4> c{};
+  int n = 0;
+  if (v.is_string()) {
+    std::stringstream in(v.get<std::string>());
+    std::string item;
+    while (std::getline(in, item, ',') && n < 5) {
+      try {
+        size_t used = 0;
+        const int x = std::stoi(item, &used);
+        if (used != item.size()) throw std::invalid_argument(item);
+        if (n < 4) c[n] = x;
+        ++n;
+      } catch (const std::exception&) {
+        n = -100;
+        break;
+      }
+    }
+  }
+  if (n != 4 || c[0] < 0 || c[1] < 0 || c[2] < 32 || c[3] < 32)
+    throw UsageError("'crop' must be \"x,y,w,h\" in pixels (w and h at least 32)", "send \"crop\": \"0,0,512,512\"");
+  return c;
+}
+
 search::MatchOptions match_options_from_json(const nlohmann::json& j) {
   if (!j.is_object()) throw UsageError("match options must be a JSON object", "send e.g. {\"budget\": \"20s\"}");
   static const std::vector<std::string> known = {"shaders", "candidates", "screen", "race", "starts", "evaluations",
-                                                 "budget", "fix", "optimizer", "render_size", "threshold"};
+                                                 "budget", "fix", "optimizer", "render_size", "threshold", "crop"};
   for (const auto& [k, v] : j.items())
     if (std::find(known.begin(), known.end(), k) == known.end())
       throw UsageError("unknown match option '" + k + "'", "known: shaders, candidates, screen, race, starts, "
-                                                           "evaluations, budget, fix, optimizer, threshold, render_size");
+                                                           "evaluations, budget, fix, optimizer, threshold, render_size, crop");
   search::MatchOptions o;
   if (j.contains("shaders") && !j["shaders"].is_null()) {
     const auto& s = j["shaders"];
@@ -109,6 +133,7 @@ search::MatchOptions match_options_from_json(const nlohmann::json& j) {
   o.shader_threshold = field<double>(j, "threshold", 0.0, 0.0, 1.0);
   o.refine.max_evaluations = field<long>(j, "evaluations", o.refine.max_evaluations, 1, 1000000);
   field<int>(j, "render_size", 512, 16, 4096);
+  if (j.contains("crop")) crop_from_json(j["crop"]);
   if (j.contains("optimizer")) {
     if (!j["optimizer"].is_string()) throw UsageError("'optimizer' must be a name", "neldermead, subplex, bobyqa, global or gradient");
     o.refine.optimizer = search::parse_optimizer(j["optimizer"].get<std::string>());
@@ -279,7 +304,14 @@ nlohmann::json JobRunner::run_match(const JobRecord& job, LiveJob& live) {
   ImageLimits limits;
   limits.max_dimension = job.params.value("max_dimension", 8192);
   limits.max_pixels = job.params.value("max_pixels", int64_t(1) << 25);
-  const Image target = load_image(input, limits);
+  Image target = load_image(input, limits);
+  if (opts.contains("crop")) {
+    const auto c = crop_from_json(opts["crop"]);
+    if (c[0] + c[2] > target.width || c[1] + c[3] > target.height)
+      throw UsageError(fmt::format("crop {},{},{},{} is outside the {}x{} photo", c[0], c[1], c[2], c[3], target.width, target.height),
+                       "crop inside the photo");
+    target = crop(target, c[0], c[1], c[2], c[3]);
+  }
   if (!fs::exists(options_.catalog))
     throw Error("no catalogue at '" + options_.catalog.string() + "'", "start the server with --db CATALOG");
   catalog::Store store(options_.catalog, catalog::Store::Access::Read);

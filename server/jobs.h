@@ -4,6 +4,7 @@
 // A job calls the same library function as the CLI (search::match, transform::plan + render_frames)
 // and reports live progress (stage, evaluations, best similarity, a small preview PNG of the best
 // render so far) that the SSE stream and the status endpoint read.
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <deque>
@@ -88,6 +89,8 @@ class JobRunner {
 // Match options from the JSON of POST /api/jobs/match (names as on the command line); throws
 // UsageError naming the bad field.
 search::MatchOptions match_options_from_json(const nlohmann::json& j);
+// The "crop" option, "x,y,w,h" in pixels (w, h >= 32); throws UsageError.
+std::array<int, 4> crop_from_json(const nlohmann::json& v);
 
 // A PNG of `image` in memory (written through image/'s atomic save into `tmp_dir`, read back).
 std::string encode_png(const Image& image, const std::filesystem::path& tmp_dir, const std::string& ext = ".png");

@@ -1,5 +1,7 @@
 #include "server/server.h"
 
+#include <sys/socket.h>
+
 #include <chrono>
 #include <fstream>
 #include <mutex>
@@ -156,6 +158,7 @@ struct Server::Impl {
   std::unique_ptr<JobRunner> runner;
   httplib::Server http;
   int port = 0;
+  socket_t listen_socket = -1;
   std::mutex render_mutex;  // UI renders one at a time (bounded memory), between the job's launches
   std::map<std::string, const std::string*> assets;
 
@@ -247,9 +250,19 @@ struct Server::Impl {
   void routes() {
     auto& s = http;
     s.set_payload_max_length(options.max_upload_bytes);
+    // cpp-httplib 0.11 listens with a backlog of 5: a burst of new connections (50 pollers) then
+    // waits for SYN retransmits, seconds each. Remember the socket to listen again with a
+    // larger backlog after bind().
+    s.set_socket_options([this](socket_t sock) {
+      httplib::default_socket_options(sock);
+      listen_socket = sock;
+    });
     const int threads = options.threads;
     s.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
-    s.set_keep_alive_timeout(2);
+    // Pollers keep their connection (each holds an HTTP thread while it does); new connections
+    // queue in cpp-httplib's accept backlog of 5.
+    s.set_keep_alive_max_count(1000);
+    s.set_keep_alive_timeout(5);
     s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
       if (options.token.empty()) return httplib::Server::HandlerResponse::Unhandled;
       const std::string bearer = "Bearer " + options.token;
@@ -595,6 +608,7 @@ int Server::bind() {
   else impl_->port = impl_->http.bind_to_port(o.bind, o.port) ? o.port : -1;
   if (impl_->port < 0)
     throw Error(fmt::format("cannot listen on {}:{}", o.bind, o.port), "the port is taken or the address is not this machine's; try --port 0");
+  if (impl_->listen_socket >= 0) ::listen(impl_->listen_socket, SOMAXCONN);  // a larger accept backlog
   return impl_->port;
 }
 

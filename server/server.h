@@ -19,10 +19,10 @@ struct ServerOptions {
   int workers = 1;                    // jobs at the same time (each uses the OpenCL device)
   int queue_limit = 8;                // jobs waiting beyond the running ones; more: 429
   std::string token;                  // bearer token; required when bind is not loopback
-  int threads = 64;                   // HTTP threads (each progress stream holds one)
+  int threads = 128;                  // HTTP threads (each progress stream and kept-alive connection holds one)
   std::size_t max_upload_bytes = 32u << 20;  // request bodies; larger: 413
   int max_upload_dimension = 8192;    // per side of an uploaded image (checked before decoding)
-  int64_t max_upload_pixels = int64_t(1) << 25;
+  int64_t max_upload_pixels = int64_t(1) << 24;  // 16.7 M pixels (192 MB as float RGB)
   int max_render_size = 4096;         // per side of /api/render
   int preview_size = 128;             // live preview side
 };

@@ -81,6 +81,7 @@ TEST_F(BadInput, UploadsAndOptionsGet4xxWithJsonErrorsAndNothingIsWrittenOutside
       {"bad budget", brick, {{"budget", "soon"}}, 400, "budget"},
       {"negative evaluations", brick, {{"evaluations", -3}}, 400, "evaluations"},
       {"wrong type", brick, {{"race", "many"}}, 400, "race"},
+      {"bad crop", brick, {{"crop", "0,0,10"}}, 400, "crop"},
       {"options not an object", brick, json::array({1, 2}), 400, "object"},
   };
   for (const auto& k : cases) {

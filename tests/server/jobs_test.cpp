@@ -195,6 +195,7 @@ TEST_F(Jobs, BoundedLoadOnlyDocumented429sAndBoundedMemory) {
   for (int i = 0; i < 50; ++i)
     pollers.emplace_back([&, i] {
       auto c = srv.client(30);
+      c.set_keep_alive(i % 2 == 0);  // half keep their connection (browsers), half open one per request
       while (!stop) {
         std::string id;
         {
@@ -203,7 +204,10 @@ TEST_F(Jobs, BoundedLoadOnlyDocumented429sAndBoundedMemory) {
         }
         auto r = c.Get(id.empty() ? "/api/health" : "/api/jobs/" + id);
         ++polls;
-        if (!r || r->status != 200 || !body_json(r).is_object()) ++poll_errors;
+        if (!r || r->status != 200 || !body_json(r).is_object()) {
+          ++poll_errors;
+          if (!r) std::fprintf(stderr, "poll failed: %s\n", httplib::to_string(r.error()).c_str());
+        }
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
       }
     });
@@ -212,7 +216,11 @@ TEST_F(Jobs, BoundedLoadOnlyDocumented429sAndBoundedMemory) {
   int accepted = 0, rejected = 0, other = 0;
   for (int i = 0; i < 10; ++i) {
     auto r = post_match(c, photo, {{"budget", 40}, {"race", 2}, {"starts", 1}});
-    ASSERT_TRUE(r);
+    EXPECT_TRUE(r) << httplib::to_string(r.error());
+    if (!r) {
+      ++other;
+      continue;
+    }
     if (r->status == 202) {
       ++accepted;
       std::lock_guard lock(m);
@@ -229,7 +237,7 @@ TEST_F(Jobs, BoundedLoadOnlyDocumented429sAndBoundedMemory) {
   // 1 running + 4 waiting (or 4 waiting before the first one started), the rest refused.
   EXPECT_GE(accepted, 4);
   EXPECT_LE(accepted, 6);
-  EXPECT_EQ(accepted + rejected, 10);
+  EXPECT_EQ(accepted + rejected, 10) << other << " failed";
   EXPECT_EQ(other, 0);
   for (const auto& id : ids) {
     const json s = wait_for(c, id, finished, 120);

@@ -73,7 +73,7 @@ class RunningServer {
   httplib::Client client(int timeout_seconds = 60) const {
     httplib::Client c("127.0.0.1", port_);
     c.set_read_timeout(timeout_seconds, 0);
-    c.set_connection_timeout(5, 0);
+    c.set_connection_timeout(30, 0);
     return c;
   }
 
