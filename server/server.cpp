@@ -146,6 +146,13 @@ std::string base64(const std::string& in) {
   return out;
 }
 
+// Compares a presented token with the server's in time independent of where they differ.
+bool same_token(const std::string& given, const std::string& token) {
+  unsigned char diff = given.size() == token.size() ? 0 : 1;
+  for (size_t i = 0; i < given.size(); ++i) diff |= static_cast<unsigned char>(given[i] ^ token[i % token.size()]);
+  return diff == 0;
+}
+
 }  // namespace
 
 bool is_loopback(const std::string& host) {
@@ -266,7 +273,7 @@ struct Server::Impl {
     s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
       if (options.token.empty()) return httplib::Server::HandlerResponse::Unhandled;
       const std::string bearer = "Bearer " + options.token;
-      if (req.get_header_value("Authorization") == bearer || req.get_param_value("token") == options.token)
+      if (same_token(req.get_header_value("Authorization"), bearer) || same_token(req.get_param_value("token"), options.token))
         return httplib::Server::HandlerResponse::Unhandled;
       send_error(res, 401, "missing or wrong bearer token", "send 'Authorization: Bearer TOKEN' (or ?token=TOKEN)");
       return httplib::Server::HandlerResponse::Handled;
