@@ -19,7 +19,10 @@ build: deps
 test: build
 	@ctest --preset $(PRESET)
 
-demo: build
+# The demo needs only the proctex binary, not every test and benchmark.
+demo: deps
+	@cmake --preset $(PRESET) >/dev/null
+	@cmake --build --preset $(PRESET) --target proctex
 	@scripts/demo.sh $(PROCTEX)
 
 bench: build

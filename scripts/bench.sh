@@ -36,4 +36,8 @@ if [[ -x "$build/bench/bench_match_eval" && -x "$build/cli/proctex" ]] && comman
     --real-images "$build/realset/images" --pictures "$results/match-real" \
     --markdown "$results/match-real.md" --json "$results/match-real.json"
 fi
+if [[ -x "$build/bench/bench_serve" && -f "$build/demo/catalog.sqlite" ]]; then
+  echo "== $build/bench/bench_serve (proctex serve: slider renders, first preview, service vs CLI; demo catalogue)"
+  "$build/bench/bench_serve" --db "$build/demo/catalog.sqlite" --markdown "$results/serve.md"
+fi
 echo "bench: tables in $results/"

@@ -42,3 +42,7 @@ echo "  photo and match side by side:                           $here/$out/compa
 echo "  every shader at its defaults:                           $here/$out/shaders.png"
 echo "  catalogue used:                                         $here/$db"
 echo "Try your own photo: $proctex match PHOTO --db $db --render out.png --size 2048 --compare cmp.png"
+echo
+echo "demo: the service and web UI (match, library, morph) with this catalogue:"
+echo "  $proctex serve --db $db"
+echo "  then open http://127.0.0.1:8080/ and drop $photo on the page (docs/service.md)"

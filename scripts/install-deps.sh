@@ -12,10 +12,14 @@ packages=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libeigen3-dev
   libgtest-dev googletest libbenchmark-dev
   fonts-dejavu-core
-  slurm-wlm munge nodejs
+  slurm-wlm munge
+  libcpp-httplib-dev chromium
 )
-# npm: a separate package with Debian's nodejs, part of NodeSource's nodejs.
-command -v npm >/dev/null 2>&1 || packages+=(npm)
+# proctex serve's browser test drives chromium and the workflow lint runs a pinned npm package:
+# node and npm, from Debian unless some other node (with its own npm, e.g. NodeSource's) is there.
+if ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 if [[ "${1:-}" == "--with-bench" ]]; then
   packages+=(hyperfine python3)  # python3: bench/realset/build.py (it fetches its own game-data .debs)
 fi

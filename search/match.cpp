@@ -315,6 +315,15 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // In the selection's order (`chosen` is): the ranking of the shaders by the evidence the
   // refinement cannot game.
   result.timings["global"] = seconds_since(t_global);
+  // The best screened start is the first best-so-far spec (live previews); `best` stays for the
+  // refinement's similarities, which are at another resolution.
+  if (const auto top = std::max_element(screened.begin(), screened.end(),
+                                        [](const Start& a, const Start& b) { return a.similarity < b.similarity; });
+      top != screened.end()) {
+    state.best_shader = top->shader;
+    state.best_spec = spec_from_packed(library.get(top->shader), top->packed, top->sample->seed);
+    report("screened");
+  }
 
   // 3. Local refinement at the coarse resolution, as a race: the top `race` starts (colours
   // polished first) get a short refinement each, then the best `starts` of them continue with the
@@ -371,6 +380,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       if (obj.best().similarity > state.best) {
         state.best = obj.best().similarity;
         state.best_shader = lane.start.shader;
+        state.best_spec = spec_from_packed(*lane.decl, obj.best().packed, lane.start.sample->seed);
       }
       state.evaluations = evaluations + obj.evaluations() - before;
       report(stage);

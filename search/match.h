@@ -95,6 +95,7 @@ struct MatchProgress {
   std::string stage;          // "target", "global", "refine 2/3", "final"
   double best = 0.0;          // best similarity so far (coarse during refinement)
   std::string best_shader;
+  TextureSpec best_spec;      // the best point so far as a spec (set with `best`; for live previews)
   long evaluations = 0;
   double elapsed = 0.0;
 };
