@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/version.h"
+#include "search/selection.h"
 
 namespace proctex::cli {
 namespace fs = std::filesystem;
@@ -94,6 +95,9 @@ nlohmann::json options_json(const search::MatchOptions& o, const std::string& cr
           {"probe_bounds", o.refine.probe_bounds},
           {"budget", {{"evaluations", o.budget.max_evaluations}, {"seconds", o.budget.max_seconds}}},
           {"fixed", fixed},
+          {"selection_weight", o.selection_weight},
+          {"polish_evaluations", o.polish_evaluations},
+          {"selection_version", search::selection_version()},
           {"crop", crop}};
 }
 

@@ -178,7 +178,7 @@ double spectral_peakiness(const metrics::Features& magnitude) {
 }  // namespace
 
 std::string verdict_for(double s, double probability) {
-  if (s >= kGoodMatch && probability >= kGoodProbability) return "good";
+  if (s >= kCertainMatch || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
   if (s >= kApproximateMatch) return "approximate";
   return "no-match";
 }
