@@ -54,6 +54,9 @@ int main(int argc, char** argv) {
   cli::add_catalog_link_command(*app.get_subcommand("catalog"), global);
   cli::add_morph_command(app, global);
 #endif
+#ifdef PROCTEX_HAVE_RGBN
+  cli::add_rgbn_command(app, global);
+#endif
 
   app.parse_complete_callback([&] {
     if (!global.device.empty()) ocl::Runtime::configure(global.device);

@@ -1,0 +1,80 @@
+// proctex rgbn from the command line: the round trip a user makes, and the error paths.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "../support/run.h"
+#include "rgbn/rgbn.h"
+#include "support.h"
+
+using proctex::testing::run_proctex;
+using namespace proctex::rgbn;
+namespace fs = std::filesystem;
+
+namespace {
+const fs::path kTextures = fs::path(PROCTEX_SHARED_DIR) / "textures";
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+}  // namespace
+
+TEST(RgbnCli, PhotoToRgbnEditLightExportRoundTrip) {
+  rgbn_test::TempDir dir("cli");
+  const fs::path d = dir.path;
+  // A height map from the brick photo, with the photo as albedo.
+  auto r = run_proctex("rgbn import --height " + q(kTextures / "brick.png") + " --scale 6 --albedo " +
+                           q(kTextures / "brick.png") + " -o " + q(d / "brick.exr") + " --json",
+                       d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_LT(j["integrability"].get<double>(), 1e-3);
+  const Rgbn brick = load_rgbn(d / "brick.exr");
+  EXPECT_LT(max_norm_error(brick), 1e-5);
+
+  std::ofstream(d / "ops.json") << R"([{"op":"stamp","at":[60,60],"shape":"dome","radius":20,"height":8},
+    {"op":"pen","points":[[10,100],[120,130]],"width":4,"depth":2,"profile":"vee","xi":15}])";
+  r = run_proctex("rgbn edit " + q(d / "ops.json") + " " + q(d / "brick.exr") + " -o " + q(d / "edited.exr") + " --json", d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto e = nlohmann::json::parse(r.out);
+  ASSERT_EQ(e["edits"].size(), 2u);
+  EXPECT_GT(e["edits"][0]["pixels_changed"].get<int>(), 1000);
+
+  r = run_proctex("rgbn light " + q(d / "edited.exr") + " --light 135,40 --model blinn -o " + q(d / "lit.png"), d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(d / "lit.png"));
+  for (const char* v : {"albedo", "normals", "needles", "mean", "gaussian", "segments"}) {
+    r = run_proctex("rgbn view " + q(d / "edited.exr") + " --view " + v + " -o " + q(d / (std::string(v) + ".png")), d);
+    EXPECT_EQ(r.exit_code, 0) << v << r.err;
+  }
+  // Export in DirectX, import back as DirectX: the same normals (16-bit).
+  r = run_proctex("rgbn export " + q(d / "edited.exr") + " --convention dx --bits 16 -o " + q(d / "n.png"), d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_proctex("rgbn import " + q(d / "n.png") + " --convention dx -o " + q(d / "back.exr"), d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LT(rgbn_test::max_angle(load_rgbn(d / "edited.exr"), load_rgbn(d / "back.exr")), 0.02);
+}
+
+TEST(RgbnCli, ErrorsAreOneLineNonZeroAndWriteNothing) {
+  rgbn_test::TempDir dir("clierr");
+  const fs::path d = dir.path;
+  save_rgbn(Rgbn(16, 16), d / "flat.exr");
+  struct Case {
+    std::string args;
+    int code;
+  };
+  const std::vector<Case> cases = {
+      {"rgbn export " + q(d / "flat.exr") + " --convention up -o " + q(d / "out.png"), 2},
+      {"rgbn filter " + q(kTextures / "brick.png") + " -o " + q(d / "out.exr"), 2},
+      {"rgbn import --height " + q(kTextures / "brick.png") + " --albedo " + q(kTextures / "hubble_deep_field.jpg") + " -o " + q(d / "out.exr"), 1},
+      {"rgbn stereo " + q(d / "a.png") + " " + q(d / "b.png") + " --light 0,45 --light 90,45 -o " + q(d / "out.exr"), 2},
+      {"rgbn edit " + q(d / "missing.json") + " " + q(d / "flat.exr") + " -o " + q(d / "out.exr"), 1},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_proctex(c.args, d);
+    EXPECT_EQ(r.exit_code, c.code) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("proctex: error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(d / "out.exr")) << c.args;
+    EXPECT_FALSE(fs::exists(d / "out.png")) << c.args;
+  }
+}
