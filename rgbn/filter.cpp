@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "core/error.h"
 #include "rgbn/parallel.h"
@@ -37,6 +39,20 @@ std::vector<float> gaussian_taps(float sigma) {
   for (int i = -r; i <= r; ++i) sum += taps[i + r] = float(std::exp(-0.5 * double(i) * i / (double(sigma) * sigma)));
   for (float& t : taps) t = float(t / sum);
   return taps;
+}
+
+// exp(x) for x <= 0 to ~1e-5 relative: 2^(x log2 e) split into an exponent and a degree-5
+// polynomial of the fraction. The bilateral filter evaluates one per tap; std::exp was 3/4 of
+// its time.
+inline float fast_exp(float x) {
+  const float t = std::max(x, -80.0f) * 1.44269504f;
+  const float fi = std::floor(t), f = t - fi;
+  const float p = 1.0f + f * (0.693147182f + f * (0.240226507f + f * (0.0555041087f + f * (0.00961812911f + f * 0.00133335581f))));
+  const int e = int(fi) + 127;
+  uint32_t bits = uint32_t(std::max(e, 0)) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return e <= 0 ? 0.0f : p * scale;
 }
 
 inline int border(int i, int n, bool wrap) {
@@ -220,7 +236,7 @@ Rgbn bilateral(const Rgbn& image, const BilateralOptions& o, const Mask* mask) {
             const float* n = &image.normal[3 * c];
             const float dc = (a[0] - a0[0]) * (a[0] - a0[0]) + (a[1] - a0[1]) * (a[1] - a0[1]) + (a[2] - a0[2]) * (a[2] - a0[2]);
             const float dn = (n[0] - n0[0]) * (n[0] - n0[0]) + (n[1] - n0[1]) * (n[1] - n0[1]) + (n[2] - n0[2]) * (n[2] - n0[2]);
-            const float wt = ks[(j + r) * (2 * r + 1) + (i + r)] * std::exp(ic * dc + in * dn);
+            const float wt = ks[(j + r) * (2 * r + 1) + (i + r)] * fast_exp(ic * dc + in * dn);
             sw += wt;
             for (int k = 0; k < 3; ++k) sa[k] += wt * a[k], sn[k] += wt * n[k];
           }

@@ -163,8 +163,10 @@ std::vector<VmfLobe> fit_vmf(const std::vector<Vec3>& ns, int J, int iterations)
       if (w < 1e-9) continue;
       const double rl = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
       if (rl > 1e-12) lobes[j].mu = {float(r[0] / rl), float(r[1] / rl), float(r[2] / rl)};
-      const double rb = std::min(rl / w, 1.0 - 1e-6);
-      lobes[j].kappa = float(std::min(1e6, (3 * rb - rb * rb * rb) / (1 - rb * rb)));
+      // kappa from the mean resultant length (Banerjee et al.); identical normals give a lobe so
+      // sharp (1e9) that its Blinn-Phong convolution is the plain lobe to float precision.
+      const double rb = std::min(rl / w, 1.0 - 1e-9);
+      lobes[j].kappa = float(std::min(1e9, (3 * rb - rb * rb * rb) / (1 - rb * rb)));
     }
   }
   lobes.erase(std::remove_if(lobes.begin(), lobes.end(), [](const VmfLobe& l) { return l.alpha < 1e-6f; }), lobes.end());

@@ -87,7 +87,7 @@ JumpMap build_jump_map(const Rgbn& ex, const JumpMapOptions& o) {
 
 namespace {
 
-// Hilbert index -> (x, y) on a 2^k grid.
+// Hilbert index -> (x, y) on a 2^k grid (the classic iterative conversion).
 void d2xy(int n, int d, int& x, int& y) {
   x = y = 0;
   for (int s = 1, t = d; s < n; s *= 2, t /= 4) {
@@ -173,7 +173,15 @@ JumpSynthResult run(const Rgbn& ex, const JumpMap& map, Rgbn out, const std::vec
     }
     int src;
     if (nc > 0) {
-      src = cands[rng() % nc];
+      // Coherence: the candidate most neighbours agree on (ties: the first, i.e. left/up, which
+      // the traversal synthesised most recently); a random pick per pixel would mix sources.
+      int best = 0, votes = 0;
+      for (int a = 0; a < nc; ++a) {
+        int v = 0;
+        for (int b = 0; b < nc; ++b) v += cands[b] == cands[a];
+        if (v > votes) votes = v, best = a;
+      }
+      src = cands[best];
       if (unit(rng) < o.jump_probability) {
         src = jump_from(src);
         ++runs;
