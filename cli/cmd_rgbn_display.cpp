@@ -187,7 +187,10 @@ void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
 
 void lit_flags(CLI::App* cmd, LitOptions& o) {
   cmd->add_option("photos", o.images, "Photos (linear after sRGB decoding), one --light each, in order");
-  cmd->add_option("--light", o.lights, "Light direction per photo: azimuth,elevation (degrees) or x,y,z")->take_all();
+  cmd->add_option("--light", o.lights, "Light direction per photo: azimuth,elevation (degrees) or x,y,z")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--lights", o.lights_file, "JSON list [{\"image\":..., \"light\":[x,y,z] or \"az,el\"}, ...]");
   cmd->add_option("-o,--output", o.output, "Output file")->required();
   cmd->add_flag("--json", o.json, "Print a JSON report");

@@ -77,8 +77,6 @@ Segmentation segment(const Rgbn& image, const SegmentOptions& o) {
   if (!(o.k > 0) || o.min_size < 0 || !(o.alpha >= 0 && o.alpha <= 1))
     throw UsageError("segmentation needs k > 0, min size >= 0 and alpha in [0, 1]", "e.g. --k 0.5 --min-size 50");
   const int w = image.width, h = image.height;
-  std::vector<Edge> edges;
-  edges.reserve(image.size() * 4);
   auto weight = [&](size_t i, size_t j) {
     const float* a = &image.albedo[3 * i];
     const float* b = &image.albedo[3 * j];
@@ -93,14 +91,25 @@ Segmentation segment(const Rgbn& image, const SegmentOptions& o) {
     }
     return (1 - o.alpha) * dc + o.alpha * dn;
   };
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const size_t i = size_t(y) * w + x;
-      if (x + 1 < w) edges.push_back({weight(i, i + 1), int(i), int(i + 1)});
-      if (y + 1 < h) edges.push_back({weight(i, i + w), int(i), int(i + w)});
-      if (x + 1 < w && y + 1 < h) edges.push_back({weight(i, i + w + 1), int(i), int(i + w + 1)});
-      if (x > 0 && y + 1 < h) edges.push_back({weight(i, i + w - 1), int(i), int(i + w - 1)});
-    }
+  // Four edges per pixel (right, down, down-right, down-left) at fixed slots, built in parallel;
+  // slots without a neighbour get a negative weight and are dropped.
+  std::vector<Edge> all(image.size() * 4);
+  detail::parallel_rows(h, [&](int y0, int y1) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        Edge* e = &all[4 * i];
+        e[0] = x + 1 < w ? Edge{weight(i, i + 1), int(i), int(i + 1)} : Edge{-1, 0, 0};
+        e[1] = y + 1 < h ? Edge{weight(i, i + w), int(i), int(i + w)} : Edge{-1, 0, 0};
+        e[2] = x + 1 < w && y + 1 < h ? Edge{weight(i, i + w + 1), int(i), int(i + w + 1)} : Edge{-1, 0, 0};
+        e[3] = x > 0 && y + 1 < h ? Edge{weight(i, i + w - 1), int(i), int(i + w - 1)} : Edge{-1, 0, 0};
+      }
+  });
+  std::vector<Edge> edges;
+  edges.reserve(all.size());
+  for (const Edge& e : all)
+    if (e.w >= 0) edges.push_back(e);
+  std::vector<Edge>().swap(all);
   // Counting sort on the weight quantised to 2^16 levels (stable: ties keep pixel order). A
   // comparison sort of the 4 N edges took most of the time on large images.
   {

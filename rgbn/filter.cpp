@@ -1,6 +1,7 @@
 #include "rgbn/filter.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -45,14 +46,46 @@ std::vector<float> gaussian_taps(float sigma) {
 // polynomial of the fraction. The bilateral filter evaluates one per tap; std::exp was 3/4 of
 // its time.
 inline float fast_exp(float x) {
-  const float t = std::max(x, -80.0f) * 1.44269504f;
-  const float fi = std::floor(t), f = t - fi;
+  // Branch-free (vectorises): t in [-115.4, 0], floor by truncation, exponent always normal.
+  const float t = std::fmax(x, -80.0f) * 1.44269504f;
+  int i = int(t);
+  i -= int(float(i) > t);
+  const float f = t - float(i);
   const float p = 1.0f + f * (0.693147182f + f * (0.240226507f + f * (0.0555041087f + f * (0.00961812911f + f * 0.00133335581f))));
-  const int e = int(fi) + 127;
-  uint32_t bits = uint32_t(std::max(e, 0)) << 23;
-  float scale;
-  std::memcpy(&scale, &bits, sizeof scale);
-  return e <= 0 ? 0.0f : p * scale;
+  return p * std::bit_cast<float>(int32_t(i + 127) << 23);
+}
+
+// One tap (i, j) of the bilateral filter for a row of n output pixels: planar source rows s[6],
+// centre rows c[6]; accumulates the weight and the weighted channels into acc (7 rows of n).
+void bilateral_taps(const float* const* s, const float* const* c, float k, float ic, float in, int n, float* acc) {
+  const float* __restrict s0 = s[0];
+  const float* __restrict s1 = s[1];
+  const float* __restrict s2 = s[2];
+  const float* __restrict s3 = s[3];
+  const float* __restrict s4 = s[4];
+  const float* __restrict s5 = s[5];
+  const float* __restrict q0 = c[0];
+  const float* __restrict q1 = c[1];
+  const float* __restrict q2 = c[2];
+  const float* __restrict q3 = c[3];
+  const float* __restrict q4 = c[4];
+  const float* __restrict q5 = c[5];
+  float* __restrict ww = acc;
+  float* __restrict a0 = acc + n;
+  float* __restrict a1 = acc + 2 * n;
+  float* __restrict a2 = acc + 3 * n;
+  float* __restrict n0 = acc + 4 * n;
+  float* __restrict n1 = acc + 5 * n;
+  float* __restrict n2 = acc + 6 * n;
+#pragma omp simd
+  for (int x = 0; x < n; ++x) {
+    const float d0 = s0[x] - q0[x], d1 = s1[x] - q1[x], d2 = s2[x] - q2[x];
+    const float e0 = s3[x] - q3[x], e1 = s4[x] - q4[x], e2 = s5[x] - q5[x];
+    const float wt = k * fast_exp(ic * (d0 * d0 + d1 * d1 + d2 * d2) + in * (e0 * e0 + e1 * e1 + e2 * e2));
+    ww[x] += wt;
+    a0[x] += wt * s0[x], a1[x] += wt * s1[x], a2[x] += wt * s2[x];
+    n0[x] += wt * s3[x], n1[x] += wt * s4[x], n2[x] += wt * s5[x];
+  }
 }
 
 inline int border(int i, int n, bool wrap) {
@@ -214,40 +247,48 @@ Rgbn bilateral(const Rgbn& image, const BilateralOptions& o, const Mask* mask) {
     throw UsageError("bilateral widths must be positive (sigma_s < 100)", "e.g. --sigma 2 --sigma-c 0.1 --sigma-n 0.2");
   const int w = image.width, h = image.height;
   const int r = std::max(1, int(std::ceil(2.0f * o.sigma_s)));
-  std::vector<float> ks((2 * r + 1) * (2 * r + 1));
-  for (int j = -r; j <= r; ++j)
-    for (int i = -r; i <= r; ++i)
-      ks[(j + r) * (2 * r + 1) + (i + r)] = std::exp(-0.5f * float(i * i + j * j) / (o.sigma_s * o.sigma_s));
+  const int W = w + 2 * r, H = h + 2 * r;
+  // Six planar channels (albedo, normal) padded by r clamped pixels: the tap loop then runs over
+  // contiguous rows with no border tests, one SIMD lane per output pixel.
+  std::vector<float> planes(size_t(6) * W * H);
+  auto plane = [&](int c) { return planes.data() + size_t(c) * W * H; };
+  for (int y = 0; y < H; ++y) {
+    const int sy = std::clamp(y - r, 0, h - 1);
+    for (int x = 0; x < W; ++x) {
+      const int sx = std::clamp(x - r, 0, w - 1);
+      const size_t si = size_t(sy) * w + sx, di = size_t(y) * W + x;
+      for (int c = 0; c < 3; ++c) {
+        plane(c)[di] = image.albedo[3 * si + c];
+        plane(3 + c)[di] = image.normal[3 * si + c];
+      }
+    }
+  }
   const float ic = -0.5f / (o.sigma_c * o.sigma_c), in = -0.5f / (o.sigma_n * o.sigma_n);
   Rgbn out = image;
   detail::parallel_rows(h, [&](int y0, int y1) {
-    for (int y = y0; y < y1; ++y)
-      for (int x = 0; x < w; ++x) {
-        const size_t c0 = size_t(y) * w + x;
-        if (mask && (*mask)[c0] <= 0.0f) continue;
-        const float* a0 = &image.albedo[3 * c0];
-        const float* n0 = &image.normal[3 * c0];
-        double sa[3] = {0, 0, 0}, sn[3] = {0, 0, 0}, sw = 0;
-        for (int j = -r; j <= r; ++j) {
-          const int yy = border(y + j, h, false);
-          for (int i = -r; i <= r; ++i) {
-            const size_t c = size_t(yy) * w + border(x + i, w, false);
-            const float* a = &image.albedo[3 * c];
-            const float* n = &image.normal[3 * c];
-            const float dc = (a[0] - a0[0]) * (a[0] - a0[0]) + (a[1] - a0[1]) * (a[1] - a0[1]) + (a[2] - a0[2]) * (a[2] - a0[2]);
-            const float dn = (n[0] - n0[0]) * (n[0] - n0[0]) + (n[1] - n0[1]) * (n[1] - n0[1]) + (n[2] - n0[2]) * (n[2] - n0[2]);
-            const float wt = ks[(j + r) * (2 * r + 1) + (i + r)] * fast_exp(ic * dc + in * dn);
-            sw += wt;
-            for (int k = 0; k < 3; ++k) sa[k] += wt * a[k], sn[k] += wt * n[k];
-          }
+    std::vector<float> acc(size_t(7) * w);
+    float* aw = acc.data();
+    for (int y = y0; y < y1; ++y) {
+      std::fill(acc.begin(), acc.end(), 0.0f);
+      const float* c0[6];
+      for (int c = 0; c < 6; ++c) c0[c] = plane(c) + size_t(y + r) * W + r;
+      for (int j = -r; j <= r; ++j)
+        for (int i = -r; i <= r; ++i) {
+          const float k = std::exp(-0.5f * float(i * i + j * j) / (o.sigma_s * o.sigma_s));
+          const float* s[6];
+          for (int c = 0; c < 6; ++c) s[c] = plane(c) + size_t(y + r + j) * W + r + i;
+          bilateral_taps(s, c0, k, ic, in, w, aw);
         }
-        float* on = &out.normal[3 * c0];
-        const double len = std::sqrt(sn[0] * sn[0] + sn[1] * sn[1] + sn[2] * sn[2]);
-        if (len > 1e-12)
-          for (int k = 0; k < 3; ++k) on[k] = float(sn[k] / len);
+      for (int x = 0; x < w; ++x) {
+        float* on = out.n(x, y);
+        const float sn[3] = {aw[4 * w + x], aw[5 * w + x], aw[6 * w + x]};
+        const float len = std::sqrt(sn[0] * sn[0] + sn[1] * sn[1] + sn[2] * sn[2]);
+        if (len > 1e-12f)
+          for (int c = 0; c < 3; ++c) on[c] = sn[c] / len;
         if (o.albedo)
-          for (int k = 0; k < 3; ++k) out.albedo[3 * c0 + k] = float(sa[k] / sw);
+          for (int c = 0; c < 3; ++c) out.a(x, y)[c] = aw[(1 + c) * w + x] / aw[x];
       }
+    }
   });
   if (mask) apply_mask(image, out, *mask);
   return out;
