@@ -1,7 +1,6 @@
 #include "rgbn/filter.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -42,17 +41,16 @@ std::vector<float> gaussian_taps(float sigma) {
   return taps;
 }
 
-// exp(x) for x <= 0 to ~1e-5 relative: 2^(x log2 e) split into an exponent and a degree-5
-// polynomial of the fraction. The bilateral filter evaluates one per tap; std::exp was 3/4 of
-// its time.
+// exp(x) for x <= 0 as (1 + x/1024)^1024 (ten squarings): relative error ~x^2/2048 (0.4% at
+// x = -3, where the weight is already 0.05), exactly 1 at 0, pure arithmetic so the bilateral's
+// tap loop vectorises. Bit-trick versions (2^i via the exponent field) did not vectorise with
+// GCC 12 at SSE2.
 inline float fast_exp(float x) {
-  // Branch-free (vectorises): t in [-115.4, 0], floor by truncation, exponent always normal.
-  const float t = std::fmax(x, -80.0f) * 1.44269504f;
-  int i = int(t);
-  i -= int(float(i) > t);
-  const float f = t - float(i);
-  const float p = 1.0f + f * (0.693147182f + f * (0.240226507f + f * (0.0555041087f + f * (0.00961812911f + f * 0.00133335581f))));
-  return p * std::bit_cast<float>(int32_t(i + 127) << 23);
+  float y = 1.0f + x * (1.0f / 1024.0f);
+  y = 0.5f * (y + std::fabs(y));  // max(y, 0) without a branch
+  y *= y, y *= y, y *= y, y *= y, y *= y;
+  y *= y, y *= y, y *= y, y *= y, y *= y;
+  return y;
 }
 
 // One tap (i, j) of the bilateral filter for a row of n output pixels: planar source rows s[6],

@@ -154,10 +154,42 @@ JumpSynthResult run(const Rgbn& ex, const JumpMap& map, Rgbn out, const std::vec
   size_t runs = 0, continued = 0;
   const int dx[4] = {-1, 0, 1, 0}, dy[4] = {0, -1, 0, 1};
   auto random_source = [&] { return int(rng() % uint64_t(ew * eh)); };
-  auto jump_from = [&](int s) {
-    const auto& j = map.jumps[s];
-    return j.empty() ? random_source() : j[rng() % j.size()];
+  // Known context: pixels already synthesised, and (fill) every pixel outside the region.
+  auto known = [&](size_t q) { return !inside[q] || res.source[q] >= 0; };
+  // Mismatch between the example around c and the known output around p (5x5, without p).
+  auto cost = [&](int p, int c) {
+    const int x = p % w, y = p / w, cx = c % ew, cy = c / ew;
+    float sum = 0;
+    int n = 0;
+    for (int j = -2; j <= 2; ++j)
+      for (int i = -2; i <= 2; ++i) {
+        const int qx = x + i, qy = y + j, ex_x = cx + i, ex_y = cy + j;
+        if ((i == 0 && j == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+        const size_t q = size_t(qy) * w + qx;
+        if (!known(q)) continue;
+        if (ex_x < 0 || ex_y < 0 || ex_x >= ew || ex_y >= eh) {
+          sum += 1.0f, ++n;  // the example has nothing there: a mild penalty
+          continue;
+        }
+        const float* oa = &out.albedo[3 * q];
+        const float* on = &out.normal[3 * q];
+        const float* ea = ex.a(ex_x, ex_y);
+        const float* en = ex.n(ex_x, ex_y);
+        for (int k = 0; k < 3; ++k) sum += (oa[k] - ea[k]) * (oa[k] - ea[k]) + (on[k] - en[k]) * (on[k] - en[k]);
+        ++n;
+      }
+    return n ? sum / float(n) : 0.0f;
   };
+  auto best_of = [&](int p, const std::vector<int>& cs) {
+    int best = cs[0];
+    float bc = INFINITY;
+    for (int c : cs) {
+      const float v = cost(p, c);
+      if (v < bc) bc = v, best = c;
+    }
+    return best;
+  };
+  std::vector<int> pool;
   for (int p : order) {
     const int x = p % w, y = p / w;
     // Candidates: continue each synthesised neighbour's source by the same offset.
@@ -172,27 +204,27 @@ JumpSynthResult run(const Rgbn& ex, const JumpMap& map, Rgbn out, const std::vec
       if (sx >= 0 && sy >= 0 && sx < ew && sy < eh) cands[nc++] = sy * ew + sx;
     }
     int src;
-    if (nc > 0) {
-      // Coherence: the candidate most neighbours agree on (ties: the first, i.e. left/up, which
-      // the traversal synthesised most recently); a random pick per pixel would mix sources.
-      int best = 0, votes = 0;
-      for (int a = 0; a < nc; ++a) {
-        int v = 0;
-        for (int b = 0; b < nc; ++b) v += cands[b] == cands[a];
-        if (v > votes) votes = v, best = a;
-      }
-      src = cands[best];
-      if (unit(rng) < o.jump_probability) {
-        src = jump_from(src);
-        ++runs;
-      } else {
-        ++continued;
-      }
+    const bool jump = nc == 0 || unit(rng) < o.jump_probability;
+    if (!jump) {
+      // Continue the run whose example neighbourhood fits the output best (coherence).
+      pool.assign(cands, cands + nc);
+      src = best_of(p, pool);
+      ++continued;
     } else if (nn > 0) {
-      src = jump_from(neighbour_src[rng() % nn]);  // the source left the example: jump
+      // Jump: the targets of every neighbour's continuation (or source, at the example's edge),
+      // the best-fitting one.
+      pool.clear();
+      for (int k = 0; k < (nc ? nc : nn); ++k)
+        for (int t : map.jumps[nc ? cands[k] : neighbour_src[k]]) pool.push_back(t);
+      if (pool.empty()) pool.push_back(random_source());
+      src = best_of(p, pool);
       ++runs;
     } else {
-      src = random_source();
+      // A new start: the best of 64 random example pixels against the known context (fill
+      // borders), or any when nothing is known.
+      pool.clear();
+      for (int k = 0; k < 64; ++k) pool.push_back(random_source());
+      src = best_of(p, pool);
       ++runs;
     }
     res.source[p] = src;

@@ -4,7 +4,8 @@
 // neighbourhoods of colour and normal (PCA-reduced features, nearest neighbours among a seeded
 // candidate subset). Synthesis walks the output in Hilbert or shuffled-DFS order, continuing the
 // source of an already synthesised neighbour (advanced by the same offset) and taking a jump with
-// probability p per pixel (expected run ~ 1/p) or when the source leaves the example. Every output
+// probability p per pixel (expected run ~ 1/p) or when the source leaves the example; among the
+// candidates it keeps the one whose example neighbourhood fits the known output best. Every output
 // value is a copy of an example value; with `compose`, normals are the example's detail (relative
 // to its smoothed base normals) composed on the smoothed base normals of the target region.
 #include <cstdint>

@@ -78,3 +78,41 @@ TEST(RgbnCli, ErrorsAreOneLineNonZeroAndWriteNothing) {
     EXPECT_FALSE(fs::exists(d / "out.png")) << c.args;
   }
 }
+
+TEST(RgbnCli, MipSynthStereoAndPtmRunFromTheCommandLine) {
+  rgbn_test::TempDir dir("cli2");
+  const fs::path d = dir.path;
+  Rgbn r = from_height(rgbn_test::periodic_field(32, 32, 51, 4.0f), 1.0f, true);
+  save_rgbn(r, d / "r.exr");
+  auto res = run_proctex("rgbn mip " + q(d / "r.exr") + " -o " + q(d / "mips") +
+                             " --footprints 2,4 --methods naive,toksvig,vmf --exponents 16 --json",
+                         d);
+  ASSERT_EQ(res.exit_code, 0) << res.err;
+  const auto j = nlohmann::json::parse(res.out);
+  ASSERT_EQ(j["levels"].size(), 2u);
+  EXPECT_LE(j["levels"][1]["error"]["vmf"]["16"].get<double>(), j["levels"][1]["error"]["toksvig"]["16"].get<double>());
+  EXPECT_TRUE(fs::exists(d / "mips" / "vmf_f4.exr"));
+  res = run_proctex("rgbn synth " + q(d / "r.exr") + " --width 48 --height 40 --seed 3 --json -o " + q(d / "s.exr"), d);
+  ASSERT_EQ(res.exit_code, 0) << res.err;
+  EXPECT_EQ(nlohmann::json::parse(res.out)["seed"].get<int>(), 3);
+  EXPECT_EQ(load_rgbn(d / "s.exr").width, 48);
+  // Stereo from renders written by `rgbn light` (linear EXR, no ambient).
+  std::string photos, lights;
+  for (const char* l : {"0,65", "120,65", "240,65", "60,80"}) {
+    const std::string name = std::string("p") + l[0] + l[1] + ".exr";
+    res = run_proctex("rgbn light " + q(d / "r.exr") + " --light " + l + " --ambient 0 -o " + q(d / name), d);
+    ASSERT_EQ(res.exit_code, 0) << res.err;
+    photos += " " + q(d / name);
+    lights += std::string(" --light ") + l;
+  }
+  res = run_proctex("rgbn stereo" + photos + lights + " --json -o " + q(d / "ps.exr"), d);
+  ASSERT_EQ(res.exit_code, 0) << res.err;
+  const Rgbn ps = load_rgbn(d / "ps.exr");
+  double mean = 0;
+  for (size_t i = 0; i < r.size(); ++i) mean += rgbn_test::angle_deg(&ps.normal[3 * i], &r.normal[3 * i]);
+  EXPECT_LT(mean / double(r.size()), 1.0);
+  // A PTM needs 6 photos: 4 is a usage error, and nothing is written.
+  res = run_proctex("rgbn ptm fit" + photos + lights + " -o " + q(d / "x.ptm.exr"), d);
+  EXPECT_EQ(res.exit_code, 2);
+  EXPECT_FALSE(fs::exists(d / "x.ptm.exr"));
+}
