@@ -365,13 +365,17 @@ Integration to_height(const Rgbn& image, bool periodic) {
   // is i sin(w): minimise |i sx Z - P|^2 + |i sy Z + Q|^2 => Z = (-i sx P + i sy Q) / (sx^2 + sy^2).
   // (Frankot-Chellappa with the discrete derivative, so the normals of a height field give it back.)
   const double two_pi = 2.0 * M_PI;
+  // Near the Nyquist frequency sin(w) -> 0 and 1/sin would amplify noise into row/column stripes:
+  // the denominator is floored at (w/2)^2 there (below w ~ 1.9 it is the exact sin^2).
   for (int ky = 0; ky < H; ++ky) {
-    const double wy = std::sin(two_pi * (ky <= H / 2 ? ky : ky - H) / H);
+    const double fy = two_pi * (ky <= H / 2 ? ky : ky - H) / H;
+    const double wy = std::sin(fy);
     for (int kx = 0; kx < C; ++kx) {
-      const double wx = std::sin(two_pi * kx / W);
+      const double fx = two_pi * kx / W;
+      const double wx = std::sin(fx);
       const size_t i = size_t(ky) * C + kx;
-      const double d = wx * wx + wy * wy;
-      if (d < 1e-12) {
+      const double d = std::max(wx * wx + wy * wy, 0.25 * (fx * fx + fy * fy));
+      if (fx == 0 && fy == 0) {
         fp[i] = 0;
         continue;
       }
