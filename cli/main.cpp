@@ -57,6 +57,9 @@ int main(int argc, char** argv) {
 #ifdef PROCTEX_HAVE_SERVER
   cli::add_serve_command(app, global);
 #endif
+#ifdef PROCTEX_HAVE_RGBN
+  cli::add_rgbn_command(app, global);
+#endif
 
   app.parse_complete_callback([&] {
     if (!global.device.empty()) ocl::Runtime::configure(global.device);

@@ -40,4 +40,10 @@ if [[ -x "$build/bench/bench_serve" && -f "$build/demo/catalog.sqlite" ]]; then
   echo "== $build/bench/bench_serve (proctex serve: slider renders, first preview, service vs CLI; demo catalogue)"
   "$build/bench/bench_serve" --db "$build/demo/catalog.sqlite" --markdown "$results/serve.md"
 fi
+if [[ -x "$build/bench/bench_rgbn" ]]; then
+  echo "== $build/bench/bench_rgbn (2048^2 filters/curvature/views, 128^2 stamp/pen edits)"
+  "$build/bench/bench_rgbn" --benchmark_min_time=0.3
+  echo "== $build/bench/bench_rgbn_mip (normal-map MIP: Blinn-Phong error against the supersampled truth)"
+  "$build/bench/bench_rgbn_mip" --size 128 | tee "$results/rgbn_mip.md" || echo "bench_rgbn_mip: a target was missed"
+fi
 echo "bench: tables in $results/"
