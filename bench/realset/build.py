@@ -57,6 +57,7 @@ def fetch_package(pkg, out):
     deb = os.path.join(debs, sorted(have)[-1])
     version = run(["dpkg-deb", "-f", deb, "Version"]).strip()
     tmp = root + ".tmp"
+    os.makedirs(os.path.dirname(root), exist_ok=True)
     if os.path.exists(tmp):
         run(["rm", "-rf", tmp])
     print(f"realset: unpacking {os.path.basename(deb)}", file=sys.stderr)
@@ -132,14 +133,14 @@ def main():
     os.makedirs(images, exist_ok=True)
     manifest_path = os.path.join(out, "manifest.json")
     manifest = {}
-    if os.path.exists(manifest_path) and not args.force:
+    if os.path.exists(manifest_path):
         try:
             manifest = json.load(open(manifest_path))
         except ValueError:
             manifest = {}
 
     versions = {}
-    built = kept = 0
+    built = kept = mismatched = 0
     for n, item in enumerate(items, 1):
         pkg = item["package"]
         if pkg not in versions:
@@ -166,9 +167,14 @@ def main():
         chans = "R,G,B" if ch >= 3 else "0,0,0"
         fd, tmp = tempfile.mkstemp(suffix=".png", dir=images)
         os.close(fd)
-        run(["oiiotool", src, "--ch", chans, "--cut", f"{side}x{side}+{x}+{y}", "-d", "uint8", "-o", tmp])
+        run(["oiiotool", "--nosoftwareattrib", src, "--ch", chans, "--cut", f"{side}x{side}+{x}+{y}", "-d", "uint8", "-o", tmp])
         os.replace(tmp, png)
-        manifest[item["id"]] = {"png": os.path.relpath(png, out), "sha256": sha256(png), "source_size": [w, h],
+        digest = sha256(png)
+        if item.get("sha256") and item["sha256"] != digest:
+            mismatched += 1
+            print(f"realset: warning: {item['id']}: the built image differs from the labelled one (sha256)",
+                  file=sys.stderr)
+        manifest[item["id"]] = {"png": os.path.relpath(png, out), "sha256": digest, "source_size": [w, h],
                                 "crop": [x, y, side], "package_version": version}
         built += 1
         print(f"realset: [{n}/{len(items)}] {item['id']} {w}x{h} -> {side}px", file=sys.stderr)
@@ -183,6 +189,9 @@ def main():
         json.dump(manifest, f, indent=1, sort_keys=True)
     os.replace(manifest_path + ".tmp", manifest_path)
     print(f"realset: {built} built, {kept} up to date, images in {images}", file=sys.stderr)
+    if mismatched:
+        print(f"realset: warning: {mismatched} images differ from the labelled ones (other package or tool "
+              "versions): check them before comparing numbers", file=sys.stderr)
 
 
 if __name__ == "__main__":
