@@ -1,0 +1,62 @@
+#pragma once
+// Parallel controllable synthesis (Lefebvre & Hoppe 2005) on OpenCL: per level, upsample the
+// exemplar coordinates, jitter them with a hash of the ABSOLUTE pixel position (and level, seed),
+// then correct them in passes of 4 sub-passes (2x2 parity classes) using the analysis's
+// appearance-space neighbourhoods and k-coherence candidates. All matching is integer arithmetic,
+// so results are bit-identical for any thread count and any device.
+//
+// Spatial determinism: the plane is infinite; synthesise(window) computes only the window plus
+// the dependency cone of every coarser level (padding), and equals the same region of any larger
+// synthesis with the same options.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "synth/analysis.h"
+
+namespace proctex::synth {
+
+struct Window {
+  int64_t x = 0, y = 0;  // top-left pixel on the infinite plane (negative and huge offsets work)
+  int width = 0, height = 0;
+};
+
+struct SynthOptions {
+  uint32_t seed = 1;
+  // Jitter strength r_l per synthesised level, coarse to fine (levels 1..L); one value applies to
+  // every level, a shorter list repeats its last value for the finer levels. 0 = a plain tiling.
+  std::vector<float> randomness = {0.5f};
+  int passes = 2;        // correction passes per level (each 4 sub-passes)
+  int64_t period_x = 0;  // > 0: tileable output of this period (the plane wraps)
+  int64_t period_y = 0;
+};
+
+// Checks options against the analysis (randomness count and range, passes, period); throws
+// proctex::UsageError with a hint.
+void check_options(const Analysis& analysis, const SynthOptions& options);
+
+// The coarsest level that is synthesised (levels below it are the constant 0): 1 normally; with a
+// period, the first level at which the period is still an even number of pixels.
+int first_level(const Analysis& analysis, const SynthOptions& options);
+
+// Holds the analysis on the device and the built program. One per analysis; not thread-safe.
+class Synthesizer {
+ public:
+  explicit Synthesizer(const Analysis& analysis);
+  ~Synthesizer();
+  Synthesizer(const Synthesizer&) = delete;
+  Synthesizer& operator=(const Synthesizer&) = delete;
+
+  // Exemplar coordinates of every pixel of the window: 2 ints (x, y) per pixel, row-major.
+  std::vector<int32_t> synthesise(const Window& window, const SynthOptions& options);
+
+  const Analysis& analysis() const { return analysis_; }
+
+ private:
+  struct Device;
+  const Analysis& analysis_;
+  std::unique_ptr<Device> device_;
+};
+
+}  // namespace proctex::synth
