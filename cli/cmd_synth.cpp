@@ -23,8 +23,9 @@ struct SynthCliOptions {
   std::string size = "512";
   std::string window;
   int64_t seed = 1;
-  std::string randomness = "0.5";
+  std::string randomness = "1,1,0.5,0.2,0";
   int passes = 2;
+  float kappa = 2.0f;
   bool tileable = false;
   std::string exemplar_tiles = "auto";
   std::string coords;
@@ -106,6 +107,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.seed = static_cast<uint32_t>(o.seed);
   options.randomness = parse_randomness(o.randomness);
   options.passes = o.passes;
+  options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
     options.period_y = height;
@@ -179,6 +181,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"seed", options.seed},
                 {"randomness", options.randomness},
                 {"passes", options.passes},
+                {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
                 {"coords", o.coords},
@@ -227,6 +230,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_option("--passes", o->passes, "Correction passes per level (each has 4 sub-passes)")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--coherence", o->kappa,
+                  "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
+      ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();

@@ -28,6 +28,7 @@ uint sy_hash_pos(long x, long y, uint level, uint seed, uint lane) {
   return h;
 }
 int sy_wrap(int x, int n) { int r = x % n; return r < 0 ? r + n : r; }
+int sy_reflect(int x, int n) { const int p = 2 * n - 2; x = sy_wrap(x, p); return x >= n ? p - x : x; }
 long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
 
 // S_l[q] = S_{l-1}[q / 2] + floor(h_l (d - 1/2)) + J_l(q),  J = floor(h_l r_l H(q) + 1/2).
@@ -58,19 +59,23 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
 // other classes are read only, so the update in place is race-free and order-independent.
 kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
                     global const char* A, global const short* NE, global const int* C1,
-                    constant int* P, int spacing, int ew, int eh, int toroidal) {
+                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
   const int tdx[5] = {0, -1, 1, -1, 1};
   const int tdy[5] = {0, -1, -1, 1, 1};
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  int taps[40];
+  const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
+  const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
   for (int t = 0; t < 5; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
     global const char* a = A + 8 * ((long)c.y * ew + c.x);
     for (int d = 0; d < 8; ++d) {
       const int v = a[d];
+      taps[t * 8 + d] = v;
       constant int* row = P + (t * 8 + d) * 8;
       for (int k = 0; k < 8; ++k) proj[k] += v * row[k];
     }
@@ -79,12 +84,11 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
 
   int2 best = S[(long)j * w + i];
   int bestd = 0;
-  {
-    global const short* f = NE + 8 * ((long)best.y * ew + best.x);
-    for (int k = 0; k < 8; ++k) { const int e = proj[k] - f[k]; bestd += e * e; }
-  }
-  for (int dy = -1; dy <= 1; ++dy) {
-    for (int dx = -1; dx <= 1; ++dx) {
+  bestd = 0x7fffffff;
+  for (int q = 0; q < 9; ++q) {
+    {
+      // The pixel's own coordinate first, so it wins ties.
+      const int dx = odx[q], dy = ody[q];
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
       const int2 c = S[(long)nj * w + ni];
       for (int kk = 0; kk < 2; ++kk) {
@@ -95,9 +99,20 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
         if (!toroidal && (ux < 0 || ux >= ew || uy < 0 || uy >= eh)) continue;
         ux = sy_wrap(ux, ew);
         uy = sy_wrap(uy, eh);
+#ifdef SY_FULL
+        int d = 0;
+        for (int t = 0; t < 5; ++t) {
+          const int tx = toroidal ? sy_wrap(ux + tdx[t] * spacing, ew) : sy_reflect(ux + tdx[t] * spacing, ew);
+          const int ty = toroidal ? sy_wrap(uy + tdy[t] * spacing, eh) : sy_reflect(uy + tdy[t] * spacing, eh);
+          global const char* e1 = A + 8 * ((long)ty * ew + tx);
+          for (int k = 0; k < 8; ++k) { const int e = taps[t * 8 + k] - e1[k]; d += e * e; }
+        }
+#else
         global const short* f = NE + 8 * ((long)uy * ew + ux);
         int d = 0;
         for (int k = 0; k < 8; ++k) { const int e = proj[k] - f[k]; d += e * e; }
+#endif
+        if (kk == 1) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
         if (d < bestd) { bestd = d; best = (int2)(ux, uy); }
       }
     }
@@ -160,7 +175,7 @@ int first_level(const Analysis& a, const SynthOptions& o) {
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
   auto& rt = ocl::Runtime::instance();
-  device_->program = rt.program(kSource, "-cl-std=CL1.2");
+  device_->program = rt.program(kSource, std::getenv("SY_FULL") ? "-cl-std=CL1.2 -DSY_FULL" : "-cl-std=CL1.2");
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
@@ -222,14 +237,16 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l));
     const auto& lv = dev.levels[l];
-    for (int pass = 0; pass < o.passes; ++pass) {
+    static const int skip_spacing = std::getenv("SY_SKIP") ? std::atoi(std::getenv("SY_SKIP")) : 1 << 30;
+    for (int pass = 0; pass < (spacing >= skip_spacing ? 0 : o.passes); ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
         ocl::launch(dev.correct, cl::NDRange((r.w + 1) / 2, (r.h + 1) / 2), S, static_cast<cl_int>(r.w),
                     static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
                     static_cast<cl_int>(parx), static_cast<cl_int>(pary), lv.appearance, lv.neighbourhood,
                     lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
-                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
+                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
+                    static_cast<cl_int>(std::lround(o.kappa * 256)));
       }
     }
     parent = S;

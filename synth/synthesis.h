@@ -26,8 +26,11 @@ struct SynthOptions {
   uint32_t seed = 1;
   // Jitter strength r_l per synthesised level, coarse to fine (levels 1..L); one value applies to
   // every level, a shorter list repeats its last value for the finer levels. 0 = a plain tiling.
-  std::vector<float> randomness = {0.5f};
+  std::vector<float> randomness = {1.0f, 1.0f, 0.5f, 0.2f, 0.0f};
   int passes = 2;        // correction passes per level (each 4 sub-passes)
+  // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
+  // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
+  float kappa = 2.0f;
   int64_t period_x = 0;  // > 0: tileable output of this period (the plane wraps)
   int64_t period_y = 0;
 };
