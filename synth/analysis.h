@@ -23,7 +23,7 @@ inline constexpr int kAppearanceDims = 8;
 inline constexpr int kNeighbourTaps = 5;  // centre + 4 diagonals
 inline constexpr int kNeighbourDims = kAppearanceDims * kNeighbourTaps;
 inline constexpr int kProjectionShift = 8;  // fixed-point bits of the integer projection
-inline constexpr int kAnalysisVersion = 1;
+inline constexpr int kAnalysisVersion = 3;
 
 enum class Tiling { Auto, Toroidal, Bounded };
 

@@ -66,7 +66,6 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   const int tdx[5] = {0, -1, 1, -1, 1};
   const int tdy[5] = {0, -1, -1, 1, 1};
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-  int taps[40];
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
   for (int t = 0; t < 5; ++t) {
@@ -75,16 +74,15 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
     global const char* a = A + 8 * ((long)c.y * ew + c.x);
     for (int d = 0; d < 8; ++d) {
       const int v = a[d];
-      taps[t * 8 + d] = v;
       constant int* row = P + (t * 8 + d) * 8;
       for (int k = 0; k < 8; ++k) proj[k] += v * row[k];
     }
   }
   for (int k = 0; k < 8; ++k) proj[k] >>= 8;
 
-  int2 best = S[(long)j * w + i];
-  int bestd = 0;
-  bestd = 0x7fffffff;
+  int2 best = S[(long)j * w + i];  // kept if every candidate is refused
+  int bestd = 0x7fffffff;
+  const int margin = (!toroidal && 8 * spacing <= min(ew, eh)) ? spacing : 0;
   for (int q = 0; q < 9; ++q) {
     {
       // The pixel's own coordinate first, so it wins ties.
@@ -96,22 +94,17 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
         if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
         ux -= dx * spacing;
         uy -= dy * spacing;
-        if (!toroidal && (ux < 0 || ux >= ew || uy < 0 || uy >= eh)) continue;
-        ux = sy_wrap(ux, ew);
-        uy = sy_wrap(uy, eh);
-#ifdef SY_FULL
-        int d = 0;
-        for (int t = 0; t < 5; ++t) {
-          const int tx = toroidal ? sy_wrap(ux + tdx[t] * spacing, ew) : sy_reflect(ux + tdx[t] * spacing, ew);
-          const int ty = toroidal ? sy_wrap(uy + tdy[t] * spacing, eh) : sy_reflect(uy + tdy[t] * spacing, eh);
-          global const char* e1 = A + 8 * ((long)ty * ew + tx);
-          for (int k = 0; k < 8; ++k) { const int e = taps[t * 8 + k] - e1[k]; d += e * e; }
+        if (!toroidal) {
+          // A bounded exemplar: no candidate that came across its border, and at the finer levels
+          // none whose neighbourhood would leave it (patches never run across the border).
+          if (ux < margin || ux >= ew - margin || uy < margin || uy >= eh - margin) continue;
+        } else {
+          ux = sy_wrap(ux, ew);
+          uy = sy_wrap(uy, eh);
         }
-#else
         global const short* f = NE + 8 * ((long)uy * ew + ux);
         int d = 0;
         for (int k = 0; k < 8; ++k) { const int e = proj[k] - f[k]; d += e * e; }
-#endif
         if (kk == 1) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
         if (d < bestd) { bestd = d; best = (int2)(ux, uy); }
       }
@@ -175,7 +168,7 @@ int first_level(const Analysis& a, const SynthOptions& o) {
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
   auto& rt = ocl::Runtime::instance();
-  device_->program = rt.program(kSource, std::getenv("SY_FULL") ? "-cl-std=CL1.2 -DSY_FULL" : "-cl-std=CL1.2");
+  device_->program = rt.program(kSource, "-cl-std=CL1.2");
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
@@ -237,8 +230,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l));
     const auto& lv = dev.levels[l];
-    static const int skip_spacing = std::getenv("SY_SKIP") ? std::atoi(std::getenv("SY_SKIP")) : 1 << 30;
-    for (int pass = 0; pass < (spacing >= skip_spacing ? 0 : o.passes); ++pass) {
+    for (int pass = 0; pass < o.passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
         ocl::launch(dev.correct, cl::NDRange((r.w + 1) / 2, (r.h + 1) / 2), S, static_cast<cl_int>(r.w),
