@@ -127,6 +127,23 @@ int ctz64(int64_t v) {
 
 constexpr int64_t kMaxCoordinate = int64_t(1) << 60;
 
+// A fixed work-group size: PoCL compiles a kernel once per local size, and with the driver's
+// choice every new window size cost a compilation (~0.4 s CPU). Global sizes are rounded up; the
+// kernels ignore the extra items.
+constexpr int kLocalX = 16, kLocalY = 4;
+
+template <typename... Args>
+void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
+  ocl::with_cl_errors("launching a synthesis kernel", [&] {
+    cl_uint index = 0;
+    (kernel.setArg(index++, args), ...);
+    const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+    ocl::Runtime::instance().queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(rx, ry),
+                                                          cl::NDRange(kLocalX, kLocalY));
+    return 0;
+  });
+}
+
 }  // namespace
 
 struct Synthesizer::Device {
@@ -223,7 +240,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     const cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
     const cl_long period_x = o.period_x > 0 ? o.period_x >> (L - l) : 0;
     const cl_long period_y = o.period_y > 0 ? o.period_y >> (L - l) : 0;
-    ocl::launch(dev.upsample, cl::NDRange(r.w, r.h), parent, static_cast<cl_int>(parent_region.w),
+    launch2d(dev.upsample, r.w, r.h, parent, static_cast<cl_int>(parent_region.w),
                 static_cast<cl_long>(parent_region.x), static_cast<cl_long>(parent_region.y),
                 static_cast<cl_int>(parent_zero ? 1 : 0), S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                 static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(spacing),
@@ -233,7 +250,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     for (int pass = 0; pass < o.passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
-        ocl::launch(dev.correct, cl::NDRange((r.w + 1) / 2, (r.h + 1) / 2), S, static_cast<cl_int>(r.w),
+        launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
                     static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
                     static_cast<cl_int>(parx), static_cast<cl_int>(pary), lv.appearance, lv.neighbourhood,
                     lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
