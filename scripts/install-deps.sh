@@ -15,6 +15,8 @@ packages=(
 )
 if [[ "${1:-}" == "--with-bench" ]]; then
   packages+=(hyperfine)
+  # bench_synth: G'MIC (what users run today) and real exemplars from Debian texture packages.
+  packages+=(gmic neverball-data extremetuxracer-data colobot-common-textures)
 fi
 
 missing=()
