@@ -24,9 +24,7 @@ grass        extremetuxracer-data     $etr/grass02.png                 --cut 128
 pave         extremetuxracer-data     $etr/pave01.png                  --cut 128x128+0+0
 pebbles      extremetuxracer-data     $etr/pebbles04.png               --cut 128x128+0+0
 rock         extremetuxracer-data     $etr/rock02.png                  --cut 128x128+0+0
-mud          extremetuxracer-data     $etr/mud01.png                   --cut 128x128+0+0
 dirt         colobot-common-textures  $cb/dirty01.png                  --resize 128x128
-mars         colobot-common-textures  $cb/mars001.png                  --resize 128x128
 lava         colobot-common-textures  $cb/lava04.png                   --resize 128x128
 LIST
 echo "synth_exemplars: wrote $(ls "$out"/*.png | wc -l) exemplars to $out"

@@ -1,5 +1,7 @@
 // proctex synth EXEMPLAR -o out.png: exemplar-based texture synthesis (synth/).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -29,6 +31,7 @@ struct SynthCliOptions {
   bool tileable = false;
   std::string exemplar_tiles = "auto";
   std::string coords;
+  std::string jitter_map;
   std::vector<std::string> apply;
   float map_weight = 0.5f;
   int bits = 0;
@@ -118,6 +121,17 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   else if (o.exemplar_tiles != "auto")
     throw UsageError(fmt::format("--exemplar-tiles '{}' must be auto, yes or no", o.exemplar_tiles));
 
+  if (!o.jitter_map.empty()) {
+    const Image map = load_image(o.jitter_map);
+    options.jitter_map_width = map.width;
+    options.jitter_map_height = map.height;
+    options.jitter_map.resize(static_cast<size_t>(map.width) * map.height);
+    for (size_t i = 0; i < options.jitter_map.size(); ++i) {
+      const float* p = map.pixels.data() + 3 * i;
+      const float g = linear_to_srgb(std::clamp((p[0] + p[1] + p[2]) / 3.0f, 0.0f, 1.0f));
+      options.jitter_map[i] = static_cast<uint8_t>(std::lround(g * 255.0f));
+    }
+  }
   Exemplar ex;
   ex.name = std::filesystem::path(o.exemplar).filename().string();
   ex.map_weight = o.map_weight;
@@ -185,6 +199,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
                 {"coords", o.coords},
+                {"jitter_map", o.jitter_map},
                 {"maps", maps},
                 {"analysis_hash", analysis.hash},
                 {"analysis_cached", analysis.from_cache},
@@ -233,6 +248,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
+  cmd->add_option("--jitter-map", o->jitter_map,
+                  "Grey image scaling the randomness per output pixel (white = --randomness, black = none); it "
+                  "repeats over the plane from (0, 0)");
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();

@@ -25,7 +25,7 @@ if [[ -x "$build/bench/bench_morph" ]]; then
   "$build/bench/bench_morph" --repetitions 3 --markdown "$results/morph.md"
 fi
 if [[ -x "$build/bench/bench_synth" ]] && command -v gmic >/dev/null 2>&1; then
-  echo "== $build/bench/bench_synth (proctex synth vs G'MIC on 12 exemplars; a few minutes)"
+  echo "== $build/bench/bench_synth (proctex synth vs G'MIC on 10 exemplars; a few minutes)"
   bench/synth_exemplars.sh "$build/bench-synth/exemplars"
   "$build/bench/bench_synth" --exemplars "$build/bench-synth/exemplars" --work "$build/bench-synth" \
     --proctex "$build/cli/proctex" --markdown "$results/synth.md" --sheet "$results/synth-bench.png"

@@ -35,7 +35,7 @@ long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
 kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, int parent_zero,
                      global int2* S, int w, int h, long ox, long oy,
                      int spacing, int ew, int eh, long period_x, long period_y,
-                     int rq, uint seed, uint level) {
+                     int rq, uint seed, uint level, global const uchar* jmap, int jw, int jh, int shift) {
   const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const long qx = ox + i, qy = oy + j;
@@ -46,11 +46,13 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
   const long hx = period_x > 0 ? sy_wrapl(qx, period_x) : qx;
   const long hy = period_y > 0 ? sy_wrapl(qy, period_y) : qy;
   long jx = 0, jy = 0;
-  if (rq > 0) {
+  // The jitter map scales r at the finest-level pixel this one covers; it repeats over the plane.
+  const int scaled = (int)(((long)rq * jmap[sy_wrapl(qy << shift, jh) * jw + sy_wrapl(qx << shift, jw)]) / 255);
+  if (scaled > 0) {
     const int Hx = (int)(sy_hash_pos(hx, hy, level, seed, 0) % 131073U) - 65536;
     const int Hy = (int)(sy_hash_pos(hx, hy, level, seed, 1) % 131073U) - 65536;
-    jx = ((long)spacing * rq * Hx + (1L << 31)) >> 32;
-    jy = ((long)spacing * rq * Hy + (1L << 31)) >> 32;
+    jx = ((long)spacing * scaled * Hx + (1L << 31)) >> 32;
+    jy = ((long)spacing * scaled * Hy + (1L << 31)) >> 32;
   }
   S[(long)j * w + i] = (int2)(sy_wrap(s.x + offx + (int)jx, ew), sy_wrap(s.y + offy + (int)jy, eh));
 }
@@ -167,6 +169,10 @@ void check_options(const Analysis& a, const SynthOptions& o) {
       throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 0.5 = default, 1 = strong");
     }
   }
+  if (!o.jitter_map.empty() &&
+      (o.jitter_map_width <= 0 || o.jitter_map_height <= 0 ||
+       o.jitter_map.size() != static_cast<size_t>(o.jitter_map_width) * o.jitter_map_height))
+    throw UsageError("the jitter map's size does not match its pixels");
   if (o.passes < 0 || o.passes > 8) throw UsageError("--passes must be in [0, 8]");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
     throw UsageError("the tiling period must be in [2, 16777216]");
@@ -225,6 +231,11 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   }
 
   auto& dev = *device_;
+  // Spatially varying randomness: 0..255 per pixel of a map that tiles the plane (255 = r_l).
+  const bool has_map = !o.jitter_map.empty();
+  const int jw = has_map ? o.jitter_map_width : 1, jh = has_map ? o.jitter_map_height : 1;
+  const std::vector<uint8_t> full{255};
+  cl::Buffer jmap = ocl::upload(has_map ? o.jitter_map : full);
   cl::Buffer parent = ocl::output_buffer(sizeof(cl_int2));
   Region parent_region;
   bool parent_zero = true;
@@ -245,7 +256,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(parent_zero ? 1 : 0), S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                 static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(spacing),
                 static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
-                static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l));
+                static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
+                static_cast<cl_int>(jh), static_cast<cl_int>(L - l));
     const auto& lv = dev.levels[l];
     for (int pass = 0; pass < o.passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {

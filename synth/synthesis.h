@@ -31,6 +31,10 @@ struct SynthOptions {
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
   float kappa = 2.0f;
+  // Spatially varying randomness (Lefebvre's jitter map): 0..255 per pixel, scaling r_l at the
+  // finest-level pixel; the map repeats over the plane from (0, 0). Empty = 255 everywhere.
+  std::vector<uint8_t> jitter_map;
+  int jitter_map_width = 0, jitter_map_height = 0;
   int64_t period_x = 0;  // > 0: tileable output of this period (the plane wraps)
   int64_t period_y = 0;
 };

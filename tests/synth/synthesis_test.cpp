@@ -297,3 +297,46 @@ TEST(Synth, ApplyMapsStayAligned) {
 
 }  // namespace
 }  // namespace proctex::synth
+
+namespace proctex::synth {
+namespace {
+
+TEST(Synth, JitterMapScalesTheRandomnessWhereItIsPainted) {
+  Synthesizer s(photo_analysis());
+  const Window w{-40, 30, 128, 96};
+  SynthOptions o;
+  o.randomness = {1.0f, 1.0f, 0.6f, 0.3f};
+  const auto plain = s.synthesise(w, o);
+  SynthOptions white = o, black = o, none = o;
+  white.jitter_map.assign(8 * 8, 255);
+  white.jitter_map_width = white.jitter_map_height = 8;
+  black.jitter_map.assign(8 * 8, 0);
+  black.jitter_map_width = black.jitter_map_height = 8;
+  none.randomness = {0.0f};
+  EXPECT_EQ(s.synthesise(w, white), plain);       // white = the randomness as given
+  EXPECT_EQ(s.synthesise(w, black), s.synthesise(w, none));  // black = no jitter at all
+  // Half painted: the map still gives the same pixels for any window (it tiles the plane).
+  SynthOptions half = o;
+  half.jitter_map_width = half.jitter_map_height = 64;
+  half.jitter_map.resize(64 * 64);
+  for (int i = 0; i < 64 * 64; ++i) half.jitter_map[i] = (i % 64) < 32 ? 0 : 255;
+  const auto whole = s.synthesise(w, half);
+  const Window part{w.x + 37, w.y + 11, 50, 40};
+  std::vector<int32_t> cut_out;
+  for (int y = 0; y < part.height; ++y)
+    for (int x = 0; x < part.width; ++x) {
+      const size_t i = static_cast<size_t>(part.y - w.y + y) * w.width + (part.x - w.x + x);
+      cut_out.push_back(whole[2 * i]);
+      cut_out.push_back(whole[2 * i + 1]);
+    }
+  EXPECT_EQ(s.synthesise(part, half), cut_out);
+  EXPECT_NE(whole, plain);
+  SynthOptions bad = o;
+  bad.jitter_map.assign(10, 1);
+  bad.jitter_map_width = 4;
+  bad.jitter_map_height = 4;
+  EXPECT_THROW(s.synthesise(w, bad), UsageError);
+}
+
+}  // namespace
+}  // namespace proctex::synth
