@@ -32,6 +32,7 @@ struct SynthCliOptions {
   std::string exemplar_tiles = "auto";
   std::string coords;
   std::string jitter_map;
+  std::vector<std::string> pastes;
   std::vector<std::string> apply;
   float map_weight = 0.5f;
   int bits = 0;
@@ -121,6 +122,22 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   else if (o.exemplar_tiles != "auto")
     throw UsageError(fmt::format("--exemplar-tiles '{}' must be auto, yes or no", o.exemplar_tiles));
 
+  for (const auto& text : o.pastes) {
+    const auto at = text.find('@');
+    const auto rect = split(text.substr(0, at), ',');
+    const auto pos = at == std::string::npos ? std::vector<std::string>{} : split(text.substr(at + 1), ',');
+    if (rect.size() != 4 || pos.size() != 2)
+      throw UsageError(fmt::format("--paste '{}' must be EX_X,EX_Y,W,H@X,Y", text),
+                       "e.g. --paste 10,20,40,30@300,200 copies the exemplar's 40x30 rectangle at (10,20) to (300,200)");
+    SynthOptions::Paste p;
+    p.ex_x = static_cast<int>(parse_int(rect[0], "--paste"));
+    p.ex_y = static_cast<int>(parse_int(rect[1], "--paste"));
+    p.width = static_cast<int>(parse_int(rect[2], "--paste"));
+    p.height = static_cast<int>(parse_int(rect[3], "--paste"));
+    p.out_x = parse_int(pos[0], "--paste");
+    p.out_y = parse_int(pos[1], "--paste");
+    options.pastes.push_back(p);
+  }
   if (!o.jitter_map.empty()) {
     const Image map = load_image(o.jitter_map);
     options.jitter_map_width = map.width;
@@ -200,6 +217,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"tileable", o.tileable},
                 {"coords", o.coords},
                 {"jitter_map", o.jitter_map},
+                {"pastes", o.pastes},
                 {"maps", maps},
                 {"analysis_hash", analysis.hash},
                 {"analysis_cached", analysis.from_cache},
@@ -251,6 +269,10 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--jitter-map", o->jitter_map,
                   "Grey image scaling the randomness per output pixel (white = --randomness, black = none); it "
                   "repeats over the plane from (0, 0)");
+  cmd->add_option("--paste", o->pastes,
+                  "Drag and paste a feature: EX_X,EX_Y,W,H@X,Y puts that exemplar rectangle at (X, Y) of the "
+                  "plane, blended at its border; repeatable")
+      ->allow_extra_args(false);
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();

@@ -35,7 +35,8 @@ long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
 kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, int parent_zero,
                      global int2* S, int w, int h, long ox, long oy,
                      int spacing, int ew, int eh, long period_x, long period_y,
-                     int rq, uint seed, uint level, global const uchar* jmap, int jw, int jh, int shift) {
+                     int rq, uint seed, uint level, global const uchar* jmap, int jw, int jh, int shift,
+                     global const long* pastes, int paste_count) {
   const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const long qx = ox + i, qy = oy + j;
@@ -54,7 +55,15 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
     jx = ((long)spacing * scaled * Hx + (1L << 31)) >> 32;
     jy = ((long)spacing * scaled * Hy + (1L << 31)) >> 32;
   }
-  S[(long)j * w + i] = (int2)(sy_wrap(s.x + offx + (int)jx, ew), sy_wrap(s.y + offy + (int)jy, eh));
+  int2 out = (int2)(sy_wrap(s.x + offx + (int)jx, ew), sy_wrap(s.y + offy + (int)jy, eh));
+  // Pasted features: {out_x, out_y, width, height, offset_x, offset_y} on the finest grid.
+  const long fx = qx << shift, fy = qy << shift;
+  for (int k = 0; k < paste_count; ++k) {
+    global const long* pp = pastes + 6 * k;
+    if (fx >= pp[0] && fx < pp[0] + pp[2] && fy >= pp[1] && fy < pp[1] + pp[3])
+      out = (int2)((int)sy_wrapl(fx + pp[4], ew), (int)sy_wrapl(fy + pp[5], eh));
+  }
+  S[(long)j * w + i] = out;
 }
 
 // One correction sub-pass: the pixels whose absolute coordinates have parity (parx, pary). The
@@ -173,6 +182,14 @@ void check_options(const Analysis& a, const SynthOptions& o) {
       (o.jitter_map_width <= 0 || o.jitter_map_height <= 0 ||
        o.jitter_map.size() != static_cast<size_t>(o.jitter_map_width) * o.jitter_map_height))
     throw UsageError("the jitter map's size does not match its pixels");
+  for (const auto& p : o.pastes) {
+    if (p.width <= 0 || p.height <= 0 || p.ex_x < 0 || p.ex_y < 0 || p.ex_x + p.width > a.width ||
+        p.ex_y + p.height > a.height)
+      throw UsageError(fmt::format("paste rectangle {},{},{},{} is not inside the {}x{} exemplar", p.ex_x, p.ex_y,
+                                   p.width, p.height, a.width, a.height));
+    if (std::llabs(p.out_x) > kMaxCoordinate || std::llabs(p.out_y) > kMaxCoordinate)
+      throw UsageError("the paste position is too large", "positions must lie within +-2^60");
+  }
   if (o.passes < 0 || o.passes > 8) throw UsageError("--passes must be in [0, 8]");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
     throw UsageError("the tiling period must be in [2, 16777216]");
@@ -251,13 +268,25 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     const cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
     const cl_long period_x = o.period_x > 0 ? o.period_x >> (L - l) : 0;
     const cl_long period_y = o.period_y > 0 ? o.period_y >> (L - l) : 0;
+    // A paste's coordinates at level l: S_l[q] = h_l q + (ex - out) + (c_l - c_L), where c is the
+    // constant the upsampling offsets accumulate (c_{k+1} = c_k - ceil(h_{k+1} / 2)), so that the
+    // finest level copies the rectangle exactly.
+    int64_t c_gap = 0;
+    for (int k = l + 1; k <= L; ++k) c_gap += ((int64_t(1) << (L - k)) + 1) / 2;
+    std::vector<cl_long> paste_data;
+    for (const auto& p : o.pastes) {
+      paste_data.insert(paste_data.end(), {p.out_x, p.out_y, p.width, p.height, p.ex_x - p.out_x + c_gap,
+                                           p.ex_y - p.out_y + c_gap});
+    }
+    cl::Buffer paste_buffer = ocl::upload(paste_data);
     launch2d(dev.upsample, r.w, r.h, parent, static_cast<cl_int>(parent_region.w),
                 static_cast<cl_long>(parent_region.x), static_cast<cl_long>(parent_region.y),
                 static_cast<cl_int>(parent_zero ? 1 : 0), S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                 static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(spacing),
                 static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
-                static_cast<cl_int>(jh), static_cast<cl_int>(L - l));
+                static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
+                static_cast<cl_int>(o.pastes.size()));
     const auto& lv = dev.levels[l];
     for (int pass = 0; pass < o.passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {

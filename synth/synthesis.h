@@ -35,6 +35,14 @@ struct SynthOptions {
   // finest-level pixel; the map repeats over the plane from (0, 0). Empty = 255 everywhere.
   std::vector<uint8_t> jitter_map;
   int jitter_map_width = 0, jitter_map_height = 0;
+  // Drag and paste (Lefebvre ch. 3): the exemplar rectangle (ex_x, ex_y, width, height) is placed
+  // with its top-left at (out_x, out_y) of the plane: those pixels copy it verbatim at every level,
+  // and correction blends its border into the surroundings. Later pastes win where they overlap.
+  struct Paste {
+    int ex_x = 0, ex_y = 0, width = 0, height = 0;
+    int64_t out_x = 0, out_y = 0;
+  };
+  std::vector<Paste> pastes;
   int64_t period_x = 0;  // > 0: tileable output of this period (the plane wraps)
   int64_t period_y = 0;
 };

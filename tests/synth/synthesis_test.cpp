@@ -340,3 +340,47 @@ TEST(Synth, JitterMapScalesTheRandomnessWhereItIsPainted) {
 
 }  // namespace
 }  // namespace proctex::synth
+
+namespace proctex::synth {
+namespace {
+
+TEST(Synth, PastedFeatureIsCopiedVerbatimAtItsPosition) {
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  o.seed = 4;
+  o.pastes.push_back({10, 12, 30, 24, 1000, -500});  // exemplar (10,12) 30x24 -> plane (1000,-500)
+  const Window w{960, -540, 128, 100};
+  const auto S = s.synthesise(w, o);
+  int exact = 0, inner = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 30; ++x) {
+      const size_t i = static_cast<size_t>(-500 - w.y + y) * w.width + (1000 - w.x + x);
+      const bool is_exact = S[2 * i] == 10 + x && S[2 * i + 1] == 12 + y;
+      exact += is_exact;
+      if (x >= 4 && x < 26 && y >= 4 && y < 20) {  // the border band is blended by correction
+        ++inner;
+        EXPECT_TRUE(is_exact) << x << "," << y << " -> " << S[2 * i] << "," << S[2 * i + 1];
+      }
+    }
+  EXPECT_GT(inner, 0);
+  EXPECT_GE(exact, 30 * 24 * 8 / 10) << "most of the rectangle, border included, is verbatim";
+  // Without the paste that region is something else; a window of the pasted plane is exact too.
+  SynthOptions plain = o;
+  plain.pastes.clear();
+  EXPECT_NE(s.synthesise(w, plain), S);
+  const Window part{990, -510, 40, 30};
+  std::vector<int32_t> cut_out;
+  for (int y = 0; y < part.height; ++y)
+    for (int x = 0; x < part.width; ++x) {
+      const size_t i = static_cast<size_t>(part.y - w.y + y) * w.width + (part.x - w.x + x);
+      cut_out.push_back(S[2 * i]);
+      cut_out.push_back(S[2 * i + 1]);
+    }
+  EXPECT_EQ(s.synthesise(part, o), cut_out);
+  SynthOptions bad = o;
+  bad.pastes = {{50, 50, 30, 30, 0, 0}};  // leaves the 64 px exemplar
+  EXPECT_THROW(s.synthesise(w, bad), UsageError);
+}
+
+}  // namespace
+}  // namespace proctex::synth
