@@ -23,7 +23,7 @@ inline constexpr int kAppearanceDims = 8;
 inline constexpr int kNeighbourTaps = 5;  // centre + 4 diagonals
 inline constexpr int kNeighbourDims = kAppearanceDims * kNeighbourTaps;
 inline constexpr int kProjectionShift = 8;  // fixed-point bits of the integer projection
-inline constexpr int kAnalysisVersion = 3;
+inline constexpr int kAnalysisVersion = 4;
 
 enum class Tiling { Auto, Toroidal, Bounded };
 
@@ -49,8 +49,9 @@ struct Analysis {
   bool from_cache = false;
 };
 
-// True when the exemplar wraps around without a visible seam: the colour step across the wrap is no
-// larger than 1.5x the typical step between neighbouring rows/columns inside.
+// True when the exemplar wraps around without a visible seam: the mean colour step across the wrap
+// (last row to first, last column to first) is no larger than 1.1x the 95th percentile of the mean
+// steps between adjacent rows (columns) inside.
 bool tiles_seamlessly(const Exemplar& exemplar);
 
 // Analyses without the cache.

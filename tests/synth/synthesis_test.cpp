@@ -102,6 +102,18 @@ TEST(SynthAnalysis, SeamDetection) {
     for (int x = 0; x < 32; ++x)
       for (int c = 0; c < 3; ++c) ramp.pixel(x, y)[c] = (x + y) / 64.0f;
   EXPECT_FALSE(tiles_seamlessly(exemplar_of(ramp)));
+  // A tiling brick pattern whose border runs along a mortar line (a sharp but natural step) tiles.
+  Image bricks(64, 64);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const int row = y / 16, bx = (x + (row % 2) * 16) % 32;
+      const bool mortar = y % 16 == 0 || bx == 0;
+      const float n = ((x * 7 + y * 13) % 11) / 110.0f;
+      for (int c = 0; c < 3; ++c) bricks.pixel(x, y)[c] = mortar ? 0.8f : 0.25f + n;
+    }
+  EXPECT_TRUE(tiles_seamlessly(exemplar_of(bricks)));
+  // A crop of a photo does not.
+  EXPECT_FALSE(tiles_seamlessly(exemplar_of(photo(64))));
 }
 
 TEST(SynthAnalysis, CacheRoundTripAndDamagedCacheIsIgnored) {
