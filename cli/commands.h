@@ -22,6 +22,7 @@ void add_match_command(CLI::App& app, GlobalOptions& global);
 void add_morph_command(CLI::App& app, GlobalOptions& global);
 void add_serve_command(CLI::App& app, GlobalOptions& global);
 void add_rgbn_command(CLI::App& app, GlobalOptions& global);
+void add_synth_command(CLI::App& app, GlobalOptions& global);
 // `catalog link` (cmd_catalog_link.cpp): added to the `catalog` subcommand.
 void add_catalog_link_command(CLI::App& catalog, GlobalOptions& global);
 

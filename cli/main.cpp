@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   cli::add_devices_command(app, global);
   cli::add_shaders_command(app, global);
   cli::add_render_command(app, global);
+  cli::add_synth_command(app, global);
 #ifdef PROCTEX_HAVE_METRICS
   cli::add_compare_command(app, global);
 #endif

@@ -46,4 +46,10 @@ if [[ -x "$build/bench/bench_rgbn" ]]; then
   echo "== $build/bench/bench_rgbn_mip (normal-map MIP: Blinn-Phong error against the supersampled truth)"
   "$build/bench/bench_rgbn_mip" --size 128 | tee "$results/rgbn_mip.md" || echo "bench_rgbn_mip: a target was missed"
 fi
+if [[ -x "$build/bench/bench_synth" ]] && command -v gmic >/dev/null 2>&1; then
+  echo "== $build/bench/bench_synth (proctex synth vs G'MIC on 10 exemplars; a few minutes)"
+  bench/synth_exemplars.sh "$build/bench-synth/exemplars"
+  "$build/bench/bench_synth" --exemplars "$build/bench-synth/exemplars" --work "$build/bench-synth" \
+    --proctex "$build/cli/proctex" --markdown "$results/synth.md" --sheet "$results/synth-bench.png"
+fi
 echo "bench: tables in $results/"

@@ -22,6 +22,8 @@ if ! command -v npm >/dev/null 2>&1; then
 fi
 if [[ "${1:-}" == "--with-bench" ]]; then
   packages+=(hyperfine python3)  # python3: bench/realset/build.py (it fetches its own game-data .debs)
+  # bench_synth: G'MIC (what users run today) and real exemplars from Debian texture packages.
+  packages+=(gmic neverball-data extremetuxracer-data colobot-common-textures)
 fi
 
 missing=()

@@ -1,0 +1,293 @@
+// proctex synth EXEMPLAR -o out.png: exemplar-based texture synthesis (synth/).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "cli/commands.h"
+#include "cli/output.h"
+#include "core/error.h"
+#include "kernels/runtime.h"
+#include "synth/analysis.h"
+#include "synth/render.h"
+#include "synth/synthesis.h"
+
+namespace proctex::cli {
+namespace {
+
+struct SynthCliOptions {
+  std::string exemplar;
+  std::string output;
+  std::string size = "512";
+  std::string window;
+  int64_t seed = 1;
+  std::string randomness = "1,1,0.5,0.2,0";
+  int passes = 2;
+  float kappa = 2.0f;
+  bool tileable = false;
+  std::string exemplar_tiles = "auto";
+  std::string coords;
+  std::string jitter_map;
+  std::vector<std::string> pastes;
+  std::vector<std::string> apply;
+  float map_weight = 0.5f;
+  int bits = 0;
+  std::string cache_dir;
+  bool no_cache = false;
+  bool json = false;
+};
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, sep);) out.push_back(item);
+  if (!s.empty() && s.back() == sep) out.emplace_back();
+  return out;
+}
+
+int64_t parse_int(const std::string& text, const std::string& what) {
+  try {
+    size_t used = 0;
+    const long long v = std::stoll(text, &used);
+    if (used != text.size()) throw std::invalid_argument(text);
+    return v;
+  } catch (const std::exception&) {
+    throw UsageError(fmt::format("{}: '{}' is not an integer", what, text));
+  }
+}
+
+void parse_size(const std::string& text, int& w, int& h) {
+  const auto x = text.find_first_of("xX");
+  const std::string a = x == std::string::npos ? text : text.substr(0, x);
+  const std::string b = x == std::string::npos ? text : text.substr(x + 1);
+  const int64_t W = parse_int(a, "--size"), H = parse_int(b, "--size");
+  if (W < 1 || H < 1 || W > 65536 || H > 65536)
+    throw UsageError(fmt::format("--size {} is out of range", text), "use WxH or N with 1..65536 pixels per side");
+  w = static_cast<int>(W), h = static_cast<int>(H);
+}
+
+synth::Window parse_window(const std::string& text) {
+  const auto parts = split(text, ',');
+  if (parts.size() != 4)
+    throw UsageError(fmt::format("--window '{}' must be x,y,w,h", text), "e.g. --window -512,1024,256,256");
+  synth::Window w;
+  w.x = parse_int(parts[0], "--window x");
+  w.y = parse_int(parts[1], "--window y");
+  const int64_t W = parse_int(parts[2], "--window width"), H = parse_int(parts[3], "--window height");
+  if (W < 1 || H < 1 || W > 65536 || H > 65536)
+    throw UsageError(fmt::format("--window size {}x{} is out of range", W, H), "width and height in 1..65536");
+  w.width = static_cast<int>(W), w.height = static_cast<int>(H);
+  return w;
+}
+
+std::vector<float> parse_randomness(const std::string& text) {
+  std::vector<float> out;
+  for (const auto& p : split(text, ',')) {
+    try {
+      size_t used = 0;
+      const float v = std::stof(p, &used);
+      if (used != p.size()) throw std::invalid_argument(p);
+      out.push_back(v);
+    } catch (const std::exception&) {
+      throw UsageError(fmt::format("--randomness: '{}' is not a number", p), "e.g. 0.5 or 1,1,0.5,0.3,0.2");
+    }
+  }
+  return out;
+}
+
+void run(const SynthCliOptions& o, const GlobalOptions& global) {
+  using namespace synth;
+  // Parse and check everything before reading pixels or writing files.
+  int width = 0, height = 0;
+  parse_size(o.size, width, height);
+  Window window{0, 0, width, height};
+  if (!o.window.empty()) window = parse_window(o.window);
+  check_dimensions(window.width, window.height);
+  SynthOptions options;
+  options.seed = static_cast<uint32_t>(o.seed);
+  options.randomness = parse_randomness(o.randomness);
+  options.passes = o.passes;
+  options.kappa = o.kappa;
+  if (o.tileable) {
+    options.period_x = width;
+    options.period_y = height;
+  }
+  AnalysisOptions aopt;
+  if (o.exemplar_tiles == "yes") aopt.tiling = Tiling::Toroidal;
+  else if (o.exemplar_tiles == "no") aopt.tiling = Tiling::Bounded;
+  else if (o.exemplar_tiles != "auto")
+    throw UsageError(fmt::format("--exemplar-tiles '{}' must be auto, yes or no", o.exemplar_tiles));
+
+  for (const auto& text : o.pastes) {
+    const auto at = text.find('@');
+    const auto rect = split(text.substr(0, at), ',');
+    const auto pos = at == std::string::npos ? std::vector<std::string>{} : split(text.substr(at + 1), ',');
+    if (rect.size() != 4 || pos.size() != 2)
+      throw UsageError(fmt::format("--paste '{}' must be EX_X,EX_Y,W,H@X,Y", text),
+                       "e.g. --paste 10,20,40,30@300,200 copies the exemplar's 40x30 rectangle at (10,20) to (300,200)");
+    SynthOptions::Paste p;
+    p.ex_x = static_cast<int>(parse_int(rect[0], "--paste"));
+    p.ex_y = static_cast<int>(parse_int(rect[1], "--paste"));
+    p.width = static_cast<int>(parse_int(rect[2], "--paste"));
+    p.height = static_cast<int>(parse_int(rect[3], "--paste"));
+    p.out_x = parse_int(pos[0], "--paste");
+    p.out_y = parse_int(pos[1], "--paste");
+    options.pastes.push_back(p);
+  }
+  if (!o.jitter_map.empty()) {
+    const Image map = load_image(o.jitter_map);
+    options.jitter_map_width = map.width;
+    options.jitter_map_height = map.height;
+    options.jitter_map.resize(static_cast<size_t>(map.width) * map.height);
+    for (size_t i = 0; i < options.jitter_map.size(); ++i) {
+      const float* p = map.pixels.data() + 3 * i;
+      const float g = linear_to_srgb(std::clamp((p[0] + p[1] + p[2]) / 3.0f, 0.0f, 1.0f));
+      options.jitter_map[i] = static_cast<uint8_t>(std::lround(g * 255.0f));
+    }
+  }
+  Exemplar ex;
+  ex.name = std::filesystem::path(o.exemplar).filename().string();
+  ex.map_weight = o.map_weight;
+  RenderOutputs outputs;
+  outputs.colour = o.output;
+  outputs.coords = o.coords;
+  outputs.bits = o.bits;
+  struct MapArg {
+    std::string kind, in, out;
+  };
+  std::vector<MapArg> map_args;
+  for (const auto& a : o.apply) {
+    MapArg m;
+    std::string rest = a;
+    if (const auto eq = rest.find('='); eq != std::string::npos) m.kind = rest.substr(0, eq), rest = rest.substr(eq + 1);
+    const auto colon = rest.rfind(':');
+    if (colon == std::string::npos || colon == 0 || colon + 1 == rest.size())
+      throw UsageError(fmt::format("--apply '{}' must be [KIND=]IN:OUT", a), "e.g. --apply normal=rock_n.png:out_n.png");
+    m.in = rest.substr(0, colon);
+    m.out = rest.substr(colon + 1);
+    map_args.push_back(m);
+    outputs.maps.emplace_back(m.out);
+  }
+  for (const auto& m : map_args) {
+    ExemplarMap em;
+    em.name = std::filesystem::path(m.in).filename().string();
+    em.kind = parse_map_kind(m.kind, m.in);
+    ex.maps.push_back(std::move(em));
+  }
+  check_outputs(outputs, ex);
+
+  ex.colour = load_exemplar_image(o.exemplar);
+  for (size_t i = 0; i < map_args.size(); ++i) ex.maps[i].image = load_exemplar_image(map_args[i].in);
+  validate(ex);
+
+  const std::filesystem::path cache = o.no_cache ? std::filesystem::path()
+                                      : !o.cache_dir.empty() ? std::filesystem::path(o.cache_dir)
+                                                             : default_cache_dir();
+  const Analysis analysis = analyse_cached(ex, aopt, cache);
+  check_options(analysis, options);
+  if (o.tileable && first_level(analysis, options) > 1 && !global.quiet && !o.json) {
+    std::fprintf(stderr,
+                 "proctex: note: the period %dx%d is divisible by few powers of two: the coarsest %d levels "
+                 "are not randomised (a multiple of %d keeps them all)\n",
+                 width, height, first_level(analysis, options) - 1, 1 << (analysis.levels - 1));
+  }
+  Synthesizer synth(analysis);
+  Progress progress("synthesising", 100, global.quiet || o.json);
+  const RenderStats stats =
+      render(synth, ex, window, options, outputs, [&](double f) { progress.update(static_cast<long>(f * 100)); });
+  progress.finish();
+
+  if (o.json) {
+    nlohmann::json maps = nlohmann::json::array();
+    for (const auto& m : map_args) maps.push_back({{"input", m.in}, {"output", m.out}});
+    print_json({{"output", o.output},
+                {"exemplar", o.exemplar},
+                {"exemplar_size", {analysis.width, analysis.height}},
+                {"exemplar_tiles", analysis.toroidal},
+                {"window", {window.x, window.y, window.width, window.height}},
+                {"seed", options.seed},
+                {"randomness", options.randomness},
+                {"passes", options.passes},
+                {"coherence", options.kappa},
+                {"levels", analysis.levels},
+                {"tileable", o.tileable},
+                {"coords", o.coords},
+                {"jitter_map", o.jitter_map},
+                {"pastes", o.pastes},
+                {"maps", maps},
+                {"analysis_hash", analysis.hash},
+                {"analysis_cached", analysis.from_cache},
+                {"analysis_seconds", analysis.seconds},
+                {"synthesis_seconds", stats.seconds},
+                {"strips", stats.strips},
+                {"device", ocl::Runtime::instance().device().name}});
+  } else if (!global.quiet) {
+    std::printf("%s: %dx%d at (%lld, %lld) from %s (%dx%d, %s) seed %u in %s (analysis %s)\n", o.output.c_str(),
+                window.width, window.height, static_cast<long long>(window.x), static_cast<long long>(window.y),
+                ex.name.c_str(), analysis.width, analysis.height, analysis.toroidal ? "tiles" : "bounded",
+                options.seed, format_seconds(stats.seconds).c_str(),
+                analysis.from_cache ? "cached" : format_seconds(analysis.seconds).c_str());
+  }
+}
+
+}  // namespace
+
+void add_synth_command(CLI::App& app, GlobalOptions& global) {
+  auto o = std::make_shared<SynthCliOptions>();
+  auto* cmd = app.add_subcommand("synth", "Synthesise more of a texture from a small example image (exemplar)");
+  cmd->footer(
+      "Parallel controllable texture synthesis (Lefebvre & Hoppe 2005, appearance space 2006) on OpenCL.\n"
+      "The output is a window of an infinite plane: the same seed and options give the same pixels for\n"
+      "the same place whatever window is asked, so big maps can be made in pieces that fit exactly.\n"
+      "  proctex synth rocks.png -o big.png --size 2048\n"
+      "  proctex synth rocks.png -o tile.png --size 1024 --tileable\n"
+      "  proctex synth rocks.png -o part.png --window -4096,8192,512,512 --seed 7\n"
+      "  proctex synth rocks.png -o out.png --apply normal=rocks_n.png:out_n.png --apply rocks_h.png:out_h.png\n"
+      "  proctex synth rocks.png -o out.png --randomness 1,1,0.6,0.3   # coarse levels first\n"
+      "The analysis (Gaussian stack, appearance space, k-coherence) is cached in $PROCTEX_CACHE_DIR/synth\n"
+      "(default ~/.cache/proctex/synth) under the exemplar's content hash.");
+  cmd->add_option("exemplar", o->exemplar, "Example image (PNG, JPEG, TIFF, EXR), 16..512 px per side")->required();
+  cmd->add_option("-o,--output", o->output, "Output image (.png, .tif, .exr, .jpg)")->required();
+  cmd->add_option("--size", o->size, "Output size WxH or N (also the period with --tileable)")->capture_default_str();
+  cmd->add_option("--window", o->window,
+                  "Synthesise only the window x,y,w,h of the infinite plane (offsets may be negative or huge)");
+  cmd->add_option("--seed", o->seed, "Seed of every random choice")->capture_default_str()->check(
+      CLI::Range(int64_t(0), int64_t(0xffffffff)));
+  cmd->add_option("--randomness", o->randomness,
+                  "Jitter per level, one value or a list coarse to fine (0 = tiling; large coarse values change "
+                  "the layout, large fine values the detail)")
+      ->capture_default_str();
+  cmd->add_option("--passes", o->passes, "Correction passes per level (each has 4 sub-passes)")
+      ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--coherence", o->kappa,
+                  "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
+      ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
+  cmd->add_option("--jitter-map", o->jitter_map,
+                  "Grey image scaling the randomness per output pixel (white = --randomness, black = none); it "
+                  "repeats over the plane from (0, 0)");
+  cmd->add_option("--paste", o->pastes,
+                  "Drag and paste a feature: EX_X,EX_Y,W,H@X,Y puts that exemplar rectangle at (X, Y) of the "
+                  "plane, blended at its border; repeatable")
+      ->allow_extra_args(false);
+  cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
+  cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
+                  "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();
+  cmd->add_option("--coords", o->coords, "Also write the exemplar coordinate map (.exr: R = x, G = y in pixels)");
+  cmd->add_option("--apply", o->apply,
+                  "Carry an aligned map through the same synthesis: [KIND=]IN:OUT, KIND = normal, height, "
+                  "roughness, grey or colour (guessed from the file name); repeatable")
+      ->allow_extra_args(false);
+  cmd->add_option("--map-weight", o->map_weight, "Weight of the --apply maps in the matching (0 = colour only)")
+      ->capture_default_str();
+  cmd->add_option("--bits", o->bits, "Bit depth of PNG/TIFF output: 8 or 16 (default PNG 8, TIFF 16)");
+  cmd->add_option("--cache-dir", o->cache_dir, "Folder for cached analyses (default $PROCTEX_CACHE_DIR/synth)");
+  cmd->add_flag("--no-cache", o->no_cache, "Analyse again and do not cache");
+  cmd->add_flag("--json", o->json, "Print what was synthesised as JSON");
+  cmd->callback([o, &global] { run(*o, global); });
+}
+
+}  // namespace proctex::cli

@@ -1,0 +1,72 @@
+#pragma once
+// Analysis of an exemplar, done once and cached on disk by content hash (Lefebvre & Hoppe 2005/2006):
+//   - a Gaussian stack: levels l = 0..L, every level the full exemplar size, level l filtered at
+//     scale h_l = 2^(L-l) (toroidally when the exemplar tiles, mirrored at the borders otherwise);
+//   - appearance space per level: the 5x5 neighbourhood at spacing h_l of every channel, reduced by
+//     PCA to 8 dimensions and quantised to signed bytes;
+//   - the matching neighbourhood N(u): the appearance vectors at u and its four diagonal neighbours
+//     u + h_l (+-1, +-1) (5 x 8 = 40 values), reduced by a second PCA to 8 dimensions with an
+//     integer projection, so synthesis on any device computes bit-identical distances;
+//   - k-coherence candidates (k = 2): every texel itself and its most similar texel at least 5% of
+//     the exemplar size away (spatially dispersed), found by a PatchMatch search.
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "synth/exemplar.h"
+
+namespace proctex::synth {
+
+inline constexpr int kAppearanceDims = 8;
+inline constexpr int kNeighbourTaps = 5;  // centre + 4 diagonals
+inline constexpr int kNeighbourDims = kAppearanceDims * kNeighbourTaps;
+inline constexpr int kProjectionShift = 8;  // fixed-point bits of the integer projection
+inline constexpr int kAnalysisVersion = 4;
+
+enum class Tiling { Auto, Toroidal, Bounded };
+
+struct AnalysisOptions {
+  Tiling tiling = Tiling::Auto;
+};
+
+struct AnalysisLevel {
+  int spacing = 1;                       // h_l
+  std::vector<int8_t> appearance;        // w * h * 8
+  std::vector<int16_t> neighbourhood;    // w * h * 8: projected N(u)
+  std::vector<int32_t> coherent;         // w * h: index y * w + x of the k = 2 candidate
+  std::vector<int32_t> projection;       // 40 * 8: fixed-point PCA basis, row-major [tap*8+dim][out]
+};
+
+struct Analysis {
+  int width = 0, height = 0;
+  int levels = 0;  // L: levels 0..L are stored (L + 1 entries)
+  bool toroidal = false;
+  std::string hash;  // content hash (exemplar pixels, maps, weights, options, version)
+  std::vector<AnalysisLevel> level;
+  double seconds = 0;    // analysis time (0 when loaded from the cache)
+  bool from_cache = false;
+};
+
+// True when the exemplar wraps around without a visible seam: the mean colour step across the wrap
+// (last row to first, last column to first) is no larger than 1.1x the 95th percentile of the mean
+// steps between adjacent rows (columns) inside.
+bool tiles_seamlessly(const Exemplar& exemplar);
+
+// Analyses without the cache.
+Analysis analyse(const Exemplar& exemplar, const AnalysisOptions& options = {});
+
+// The cache folder: $PROCTEX_CACHE_DIR/synth, else $XDG_CACHE_HOME/proctex/synth, else
+// ~/.cache/proctex/synth.
+std::filesystem::path default_cache_dir();
+
+// Analyses, or loads the analysis cached in `cache_dir` under the exemplar's content hash (an empty
+// path disables the cache). A damaged cache file is ignored and rewritten.
+Analysis analyse_cached(const Exemplar& exemplar, const AnalysisOptions& options,
+                        const std::filesystem::path& cache_dir);
+
+// Exposed for tests: the synthesis-side integer projection of a 40-value neighbourhood.
+std::array<int16_t, kAppearanceDims> project_neighbourhood(const AnalysisLevel& level, const int8_t* taps40);
+
+}  // namespace proctex::synth

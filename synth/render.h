@@ -1,0 +1,40 @@
+#pragma once
+// Turning exemplar coordinates into files, window by window with bounded memory: the output is
+// produced in strips of rows (each strip one synthesise() call, exact by spatial determinism) and
+// streamed to every output file (colour, coordinate map, carried maps). Files are written to a
+// temporary beside the target and renamed only when every file is complete.
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "synth/exemplar.h"
+#include "synth/synthesis.h"
+
+namespace proctex::synth {
+
+struct RenderOutputs {
+  std::filesystem::path colour;                      // required
+  std::filesystem::path coords;                      // optional: .exr, R = exemplar x, G = exemplar y
+  std::vector<std::filesystem::path> maps;           // optional: one per exemplar.maps entry (or empty)
+  int bits = 0;                                      // PNG/TIFF bit depth: 8 or 16; 0 = PNG 8, TIFF 16
+};
+
+struct RenderStats {
+  double seconds = 0;   // synthesis + writing
+  int strips = 0;
+  size_t peak_strip_pixels = 0;
+};
+
+// Checks extensions, bit depth and that the parent folders exist, before any work.
+void check_outputs(const RenderOutputs& outputs, const Exemplar& exemplar);
+
+// Synthesises `window` and writes the outputs. `max_strip_pixels` bounds the memory of one strip.
+RenderStats render(Synthesizer& synth, const Exemplar& exemplar, const Window& window, const SynthOptions& options,
+                   const RenderOutputs& outputs, const std::function<void(double)>& progress = {},
+                   size_t max_strip_pixels = size_t(1) << 22);
+
+// The colour of a coordinate map (linear RGB), for tests and small outputs.
+Image colours_of(const std::vector<int32_t>& coords, int width, int height, const Image& source);
+
+}  // namespace proctex::synth

@@ -1,0 +1,317 @@
+#include "synth/synthesis.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "kernels/buffers.h"
+#include "kernels/runtime.h"
+
+namespace proctex::synth {
+namespace {
+
+// Integer-only kernels: coordinates, hashes and distances are exact on every device.
+const char* kSource = R"CL(
+uint sy_hash(uint x) {
+  x ^= x >> 16; x *= 0x7feb352dU; x ^= x >> 15; x *= 0x846ca68bU; x ^= x >> 16;
+  return x;
+}
+uint sy_hash_pos(long x, long y, uint level, uint seed, uint lane) {
+  const ulong ux = (ulong)x, uy = (ulong)y;
+  uint h = sy_hash(seed ^ sy_hash(level * 0x9e3779b9U + lane * 0x85ebca6bU + 0x632be5abU));
+  h = sy_hash(h ^ (uint)ux);
+  h = sy_hash(h ^ (uint)(ux >> 32) ^ 0x27d4eb2fU);
+  h = sy_hash(h ^ (uint)uy ^ 0x165667b1U);
+  h = sy_hash(h ^ (uint)(uy >> 32) ^ 0xd3a2646cU);
+  return h;
+}
+int sy_wrap(int x, int n) { int r = x % n; return r < 0 ? r + n : r; }
+int sy_reflect(int x, int n) { const int p = 2 * n - 2; x = sy_wrap(x, p); return x >= n ? p - x : x; }
+long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
+
+// S_l[q] = S_{l-1}[q / 2] + floor(h_l (d - 1/2)) + J_l(q),  J = floor(h_l r_l H(q) + 1/2).
+kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, int parent_zero,
+                     global int2* S, int w, int h, long ox, long oy,
+                     int spacing, int ew, int eh, long period_x, long period_y,
+                     int rq, uint seed, uint level, global const uchar* jmap, int jw, int jh, int shift,
+                     global const long* pastes, int paste_count) {
+  const int i = get_global_id(0), j = get_global_id(1);
+  if (i >= w || j >= h) return;
+  const long qx = ox + i, qy = oy + j;
+  int2 s = (int2)(0, 0);
+  if (!parent_zero) s = parent[(long)((qy >> 1) - poy) * pw + ((qx >> 1) - pox)];
+  const int offx = (qx & 1) ? spacing / 2 : -((spacing + 1) / 2);
+  const int offy = (qy & 1) ? spacing / 2 : -((spacing + 1) / 2);
+  const long hx = period_x > 0 ? sy_wrapl(qx, period_x) : qx;
+  const long hy = period_y > 0 ? sy_wrapl(qy, period_y) : qy;
+  long jx = 0, jy = 0;
+  // The jitter map scales r at the finest-level pixel this one covers; it repeats over the plane.
+  const int scaled = (int)(((long)rq * jmap[sy_wrapl(qy << shift, jh) * jw + sy_wrapl(qx << shift, jw)]) / 255);
+  if (scaled > 0) {
+    const int Hx = (int)(sy_hash_pos(hx, hy, level, seed, 0) % 131073U) - 65536;
+    const int Hy = (int)(sy_hash_pos(hx, hy, level, seed, 1) % 131073U) - 65536;
+    jx = ((long)spacing * scaled * Hx + (1L << 31)) >> 32;
+    jy = ((long)spacing * scaled * Hy + (1L << 31)) >> 32;
+  }
+  int2 out = (int2)(sy_wrap(s.x + offx + (int)jx, ew), sy_wrap(s.y + offy + (int)jy, eh));
+  // Pasted features: {out_x, out_y, width, height, offset_x, offset_y} on the finest grid.
+  const long fx = qx << shift, fy = qy << shift;
+  for (int k = 0; k < paste_count; ++k) {
+    global const long* pp = pastes + 6 * k;
+    if (fx >= pp[0] && fx < pp[0] + pp[2] && fy >= pp[1] && fy < pp[1] + pp[3])
+      out = (int2)((int)sy_wrapl(fx + pp[4], ew), (int)sy_wrapl(fy + pp[5], eh));
+  }
+  S[(long)j * w + i] = out;
+}
+
+// One correction sub-pass: the pixels whose absolute coordinates have parity (parx, pary). The
+// other classes are read only, so the update in place is race-free and order-independent.
+kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+                    global const char* A, global const short* NE, global const int* C1,
+                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
+  const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
+  const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
+  if (i >= w || j >= h) return;
+  const int tdx[5] = {0, -1, 1, -1, 1};
+  const int tdy[5] = {0, -1, -1, 1, 1};
+  int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
+  const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
+  for (int t = 0; t < 5; ++t) {
+    const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
+    const int2 c = S[(long)nj * w + ni];
+    global const char* a = A + 8 * ((long)c.y * ew + c.x);
+    for (int d = 0; d < 8; ++d) {
+      const int v = a[d];
+      constant int* row = P + (t * 8 + d) * 8;
+      for (int k = 0; k < 8; ++k) proj[k] += v * row[k];
+    }
+  }
+  for (int k = 0; k < 8; ++k) proj[k] >>= 8;
+
+  int2 best = S[(long)j * w + i];  // kept if every candidate is refused
+  int bestd = 0x7fffffff;
+  const int margin = (!toroidal && 8 * spacing <= min(ew, eh)) ? spacing : 0;
+  for (int q = 0; q < 9; ++q) {
+    {
+      // The pixel's own coordinate first, so it wins ties.
+      const int dx = odx[q], dy = ody[q];
+      const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
+      const int2 c = S[(long)nj * w + ni];
+      for (int kk = 0; kk < 2; ++kk) {
+        int ux = c.x, uy = c.y;
+        if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
+        ux -= dx * spacing;
+        uy -= dy * spacing;
+        if (!toroidal) {
+          // A bounded exemplar: no candidate that came across its border, and at the finer levels
+          // none whose neighbourhood would leave it (patches never run across the border).
+          if (ux < margin || ux >= ew - margin || uy < margin || uy >= eh - margin) continue;
+        } else {
+          ux = sy_wrap(ux, ew);
+          uy = sy_wrap(uy, eh);
+        }
+        global const short* f = NE + 8 * ((long)uy * ew + ux);
+        int d = 0;
+        for (int k = 0; k < 8; ++k) { const int e = proj[k] - f[k]; d += e * e; }
+        if (kk == 1) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
+        if (d < bestd) { bestd = d; best = (int2)(ux, uy); }
+      }
+    }
+  }
+  S[(long)j * w + i] = best;
+}
+)CL";
+
+struct Region {
+  int64_t x = 0, y = 0;
+  int w = 0, h = 0;
+};
+
+int ctz64(int64_t v) {
+  int n = 0;
+  while (v > 0 && (v & 1) == 0) v >>= 1, ++n;
+  return n;
+}
+
+constexpr int64_t kMaxCoordinate = int64_t(1) << 60;
+
+// A fixed work-group size: PoCL compiles a kernel once per local size, and with the driver's
+// choice every new window size cost a compilation (~0.4 s CPU). Global sizes are rounded up; the
+// kernels ignore the extra items.
+constexpr int kLocalX = 16, kLocalY = 4;
+
+template <typename... Args>
+void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
+  ocl::with_cl_errors("launching a synthesis kernel", [&] {
+    cl_uint index = 0;
+    (kernel.setArg(index++, args), ...);
+    const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+    ocl::Runtime::instance().queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(rx, ry),
+                                                          cl::NDRange(kLocalX, kLocalY));
+    return 0;
+  });
+}
+
+}  // namespace
+
+struct Synthesizer::Device {
+  cl::Program program;
+  cl::Kernel upsample, correct;
+  struct Level {
+    cl::Buffer appearance, neighbourhood, coherent, projection;
+  };
+  std::vector<Level> levels;
+};
+
+void check_options(const Analysis& a, const SynthOptions& o) {
+  if (o.randomness.empty()) throw UsageError("--randomness needs at least one value");
+  if (static_cast<int>(o.randomness.size()) > a.levels) {
+    throw UsageError(fmt::format("--randomness has {} values but this exemplar has {} levels", o.randomness.size(),
+                                 a.levels),
+                     "give one value, or at most one per level, coarse to fine");
+  }
+  for (float r : o.randomness) {
+    if (!(r >= 0.0f && r <= 4.0f)) {
+      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 0.5 = default, 1 = strong");
+    }
+  }
+  if (!o.jitter_map.empty() &&
+      (o.jitter_map_width <= 0 || o.jitter_map_height <= 0 ||
+       o.jitter_map.size() != static_cast<size_t>(o.jitter_map_width) * o.jitter_map_height))
+    throw UsageError("the jitter map's size does not match its pixels");
+  for (const auto& p : o.pastes) {
+    if (p.width <= 0 || p.height <= 0 || p.ex_x < 0 || p.ex_y < 0 || p.ex_x + p.width > a.width ||
+        p.ex_y + p.height > a.height)
+      throw UsageError(fmt::format("paste rectangle {},{},{},{} is not inside the {}x{} exemplar", p.ex_x, p.ex_y,
+                                   p.width, p.height, a.width, a.height));
+    if (std::llabs(p.out_x) > kMaxCoordinate || std::llabs(p.out_y) > kMaxCoordinate)
+      throw UsageError("the paste position is too large", "positions must lie within +-2^60");
+  }
+  if (o.passes < 0 || o.passes > 8) throw UsageError("--passes must be in [0, 8]");
+  if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
+    throw UsageError("the tiling period must be in [2, 16777216]");
+  if ((o.period_x > 0) != (o.period_y > 0)) throw UsageError("give a period along both axes or neither");
+  if (o.period_x > 0 && (o.period_x % 2 != 0 || o.period_y % 2 != 0)) {
+    throw UsageError(fmt::format("a tileable output needs an even size, got {}x{}", o.period_x, o.period_y),
+                     "use a size that is a multiple of a large power of two (e.g. 512 or 1024)");
+  }
+}
+
+int first_level(const Analysis& a, const SynthOptions& o) {
+  if (o.period_x <= 0) return 1;
+  const int tz = std::min(ctz64(o.period_x), ctz64(o.period_y));
+  return std::max(1, a.levels - tz + 1);
+}
+
+Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
+  auto& rt = ocl::Runtime::instance();
+  device_->program = rt.program(kSource, "-cl-std=CL1.2");
+  ocl::with_cl_errors("creating the synthesis kernels", [&] {
+    device_->upsample = cl::Kernel(device_->program, "sy_upsample");
+    device_->correct = cl::Kernel(device_->program, "sy_correct");
+    return 0;
+  });
+  for (const auto& lv : analysis.level) {
+    Device::Level d;
+    d.appearance = ocl::upload(lv.appearance);
+    d.neighbourhood = ocl::upload(lv.neighbourhood);
+    d.coherent = ocl::upload(lv.coherent);
+    d.projection = ocl::upload(lv.projection);
+    device_->levels.push_back(std::move(d));
+  }
+}
+
+Synthesizer::~Synthesizer() = default;
+
+std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptions& o) {
+  const Analysis& a = analysis_;
+  check_options(a, o);
+  if (win.width <= 0 || win.height <= 0) throw UsageError("the window must have a positive width and height");
+  if (std::llabs(win.x) > kMaxCoordinate || std::llabs(win.y) > kMaxCoordinate) {
+    throw UsageError("the window offset is too large", "offsets must lie within +-2^60");
+  }
+  const int L = a.levels;
+  const int l0 = first_level(a, o);
+  const int pad = 4 * o.passes + 2;
+  // Regions, finest first: E_L = window + pad; E_{l-1} = parents(E_l) + pad.
+  std::vector<Region> region(L + 1);
+  region[L] = {win.x - pad, win.y - pad, win.width + 2 * pad, win.height + 2 * pad};
+  for (int l = L; l > l0; --l) {
+    const Region& r = region[l];
+    const int64_t px0 = r.x >> 1, py0 = r.y >> 1;
+    const int64_t px1 = (r.x + r.w - 1) >> 1, py1 = (r.y + r.h - 1) >> 1;
+    region[l - 1] = {px0 - pad, py0 - pad, static_cast<int>(px1 - px0 + 1) + 2 * pad,
+                     static_cast<int>(py1 - py0 + 1) + 2 * pad};
+  }
+
+  auto& dev = *device_;
+  // Spatially varying randomness: 0..255 per pixel of a map that tiles the plane (255 = r_l).
+  const bool has_map = !o.jitter_map.empty();
+  const int jw = has_map ? o.jitter_map_width : 1, jh = has_map ? o.jitter_map_height : 1;
+  const std::vector<uint8_t> full{255};
+  cl::Buffer jmap = ocl::upload(has_map ? o.jitter_map : full);
+  cl::Buffer parent = ocl::output_buffer(sizeof(cl_int2));
+  Region parent_region;
+  bool parent_zero = true;
+  for (int l = l0; l <= L; ++l) {
+    const Region& r = region[l];
+    const int spacing = 1 << (L - l);
+    const size_t count = static_cast<size_t>(r.w) * r.h;
+    cl::Buffer S = ocl::with_cl_errors("allocating synthesis level", [&] {
+      return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
+    });
+    const size_t ri = static_cast<size_t>(std::min<int>(l - 1, static_cast<int>(o.randomness.size()) - 1));
+    const float rl = o.randomness[ri];
+    const cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
+    const cl_long period_x = o.period_x > 0 ? o.period_x >> (L - l) : 0;
+    const cl_long period_y = o.period_y > 0 ? o.period_y >> (L - l) : 0;
+    // A paste's coordinates at level l: S_l[q] = h_l q + (ex - out) + (c_l - c_L), where c is the
+    // constant the upsampling offsets accumulate (c_{k+1} = c_k - ceil(h_{k+1} / 2)), so that the
+    // finest level copies the rectangle exactly.
+    int64_t c_gap = 0;
+    for (int k = l + 1; k <= L; ++k) c_gap += ((int64_t(1) << (L - k)) + 1) / 2;
+    std::vector<cl_long> paste_data;
+    for (const auto& p : o.pastes) {
+      paste_data.insert(paste_data.end(), {p.out_x, p.out_y, p.width, p.height, p.ex_x - p.out_x + c_gap,
+                                           p.ex_y - p.out_y + c_gap});
+    }
+    cl::Buffer paste_buffer = ocl::upload(paste_data);
+    launch2d(dev.upsample, r.w, r.h, parent, static_cast<cl_int>(parent_region.w),
+                static_cast<cl_long>(parent_region.x), static_cast<cl_long>(parent_region.y),
+                static_cast<cl_int>(parent_zero ? 1 : 0), S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(spacing),
+                static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
+                static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
+                static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
+                static_cast<cl_int>(o.pastes.size()));
+    const auto& lv = dev.levels[l];
+    for (int pass = 0; pass < o.passes; ++pass) {
+      for (int sub = 0; sub < 4; ++sub) {
+        const int parx = sub & 1, pary = sub >> 1;
+        launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
+                    static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
+                    static_cast<cl_int>(parx), static_cast<cl_int>(pary), lv.appearance, lv.neighbourhood,
+                    lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
+                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
+                    static_cast<cl_int>(std::lround(o.kappa * 256)));
+      }
+    }
+    parent = S;
+    parent_region = r;
+    parent_zero = false;
+  }
+  // Read back the window's rows.
+  std::vector<int32_t> out(static_cast<size_t>(win.width) * win.height * 2);
+  const Region& r = region[L];
+  for (int y = 0; y < win.height; ++y) {
+    ocl::download_async(parent, static_cast<size_t>(y + pad) * r.w + pad, static_cast<size_t>(win.width),
+                        reinterpret_cast<cl_int2*>(out.data()) + static_cast<size_t>(y) * win.width);
+  }
+  ocl::finish();
+  return out;
+}
+
+}  // namespace proctex::synth

@@ -1,0 +1,77 @@
+#pragma once
+// Parallel controllable synthesis (Lefebvre & Hoppe 2005) on OpenCL: per level, upsample the
+// exemplar coordinates, jitter them with a hash of the ABSOLUTE pixel position (and level, seed),
+// then correct them in passes of 4 sub-passes (2x2 parity classes) using the analysis's
+// appearance-space neighbourhoods and k-coherence candidates. All matching is integer arithmetic,
+// so results are bit-identical for any thread count and any device.
+//
+// Spatial determinism: the plane is infinite; synthesise(window) computes only the window plus
+// the dependency cone of every coarser level (padding), and equals the same region of any larger
+// synthesis with the same options.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "synth/analysis.h"
+
+namespace proctex::synth {
+
+struct Window {
+  int64_t x = 0, y = 0;  // top-left pixel on the infinite plane (negative and huge offsets work)
+  int width = 0, height = 0;
+};
+
+struct SynthOptions {
+  uint32_t seed = 1;
+  // Jitter strength r_l per synthesised level, coarse to fine (levels 1..L); one value applies to
+  // every level, a shorter list repeats its last value for the finer levels. 0 = a plain tiling.
+  std::vector<float> randomness = {1.0f, 1.0f, 0.5f, 0.2f, 0.0f};
+  int passes = 2;        // correction passes per level (each 4 sub-passes)
+  // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
+  // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
+  float kappa = 2.0f;
+  // Spatially varying randomness (Lefebvre's jitter map): 0..255 per pixel, scaling r_l at the
+  // finest-level pixel; the map repeats over the plane from (0, 0). Empty = 255 everywhere.
+  std::vector<uint8_t> jitter_map;
+  int jitter_map_width = 0, jitter_map_height = 0;
+  // Drag and paste (Lefebvre ch. 3): the exemplar rectangle (ex_x, ex_y, width, height) is placed
+  // with its top-left at (out_x, out_y) of the plane: those pixels copy it verbatim at every level,
+  // and correction blends its border into the surroundings. Later pastes win where they overlap.
+  struct Paste {
+    int ex_x = 0, ex_y = 0, width = 0, height = 0;
+    int64_t out_x = 0, out_y = 0;
+  };
+  std::vector<Paste> pastes;
+  int64_t period_x = 0;  // > 0: tileable output of this period (the plane wraps)
+  int64_t period_y = 0;
+};
+
+// Checks options against the analysis (randomness count and range, passes, period); throws
+// proctex::UsageError with a hint.
+void check_options(const Analysis& analysis, const SynthOptions& options);
+
+// The coarsest level that is synthesised (levels below it are the constant 0): 1 normally; with a
+// period, the first level at which the period is still an even number of pixels.
+int first_level(const Analysis& analysis, const SynthOptions& options);
+
+// Holds the analysis on the device and the built program. One per analysis; not thread-safe.
+class Synthesizer {
+ public:
+  explicit Synthesizer(const Analysis& analysis);
+  ~Synthesizer();
+  Synthesizer(const Synthesizer&) = delete;
+  Synthesizer& operator=(const Synthesizer&) = delete;
+
+  // Exemplar coordinates of every pixel of the window: 2 ints (x, y) per pixel, row-major.
+  std::vector<int32_t> synthesise(const Window& window, const SynthOptions& options);
+
+  const Analysis& analysis() const { return analysis_; }
+
+ private:
+  struct Device;
+  const Analysis& analysis_;
+  std::unique_ptr<Device> device_;
+};
+
+}  // namespace proctex::synth

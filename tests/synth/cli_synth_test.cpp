@@ -1,0 +1,220 @@
+// `proctex synth` as a user runs it: outputs, determinism across runs and thread counts, windows
+// that fit together, aligned maps, and one-line errors that leave no file behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <OpenImageIO/imageio.h>
+
+#include "image/image.h"
+#include "tests/support/run.h"
+#include "tests/support/temp_dir.h"
+
+namespace proctex {
+namespace {
+
+using testing::run_proctex;
+using testing::TempDir;
+
+// A 64x64 exemplar cut from a real photo (gravel, CC0), saved as an 8-bit PNG.
+std::filesystem::path make_exemplar(const TempDir& dir, int size = 64, const std::string& name = "ex.png") {
+  const Image full = load_image(std::filesystem::path(PROCTEX_SHARED_DIR) / "textures" / "gravel.png");
+  const auto path = dir / name;
+  save_image(resize(crop(full, 64, 64, 256, 256), size, size), path);
+  return path;
+}
+
+// Points the analysis cache of the commands run from this test at the scratch folder (inherited
+// by the child process); returns "" so it reads as a prefix of the arguments.
+std::string env(const TempDir& dir) {
+  setenv("PROCTEX_CACHE_DIR", (dir / "cache").c_str(), 1);
+  return "";
+}
+
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+  return testing::read_text(a) == testing::read_text(b);
+}
+
+// The raw pixel values of a file as written (no colour conversion), as floats.
+std::vector<float> raw_pixels(const std::filesystem::path& p, int& w, int& h, int& channels, std::string& format) {
+  auto in = OIIO::ImageInput::open(p.string());
+  EXPECT_TRUE(in) << p;
+  if (!in) return {};
+  const auto& spec = in->spec();
+  w = spec.width, h = spec.height, channels = spec.nchannels;
+  format = spec.format.c_str();
+  std::vector<float> px(static_cast<size_t>(w) * h * channels);
+  in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data());
+  return px;
+}
+
+std::vector<std::string> files_in(const std::filesystem::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.is_regular_file()) out.push_back(e.path().filename().string());
+  return out;
+}
+
+TEST(SynthCli, WritesTheOutputAndReportsJson) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  const auto r = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "out.png").string() +
+                                 "' --size 200x120 --seed 9 --json",
+                             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image out = load_image(dir / "out.png");
+  EXPECT_EQ(out.width, 200);
+  EXPECT_EQ(out.height, 120);
+  EXPECT_NE(r.out.find("\"seed\": 9"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"analysis_cached\": false"), std::string::npos) << r.out;
+  // The second run finds the analysis in the cache.
+  const auto again = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "out2.png").string() +
+                                     "' --size 200x120 --seed 9 --json",
+                                 dir.path());
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.out.find("\"analysis_cached\": true"), std::string::npos) << again.out;
+  EXPECT_TRUE(same_file(dir / "out.png", dir / "out2.png"));
+}
+
+TEST(SynthCli, SameResultForAnyThreadCountAndStitchedWindows) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  const std::string common = "synth '" + ex.string() + "' --seed 3 --coords ";
+  // The whole 128x96 region at (-300, 5000) with 1 and with 2 device threads (PoCL's pool size).
+  for (const char* threads : {"1", "2"}) {
+    const std::string cmd = env(dir) + "env POCL_MAX_PTHREAD_COUNT=" + threads + " '" +
+                            PROCTEX_BINARY + "' " + common + "'" + (dir / (std::string("w") + threads + ".exr")).string() +
+                            "' -o '" + (dir / (std::string("w") + threads + ".png")).string() +
+                            "' --window -300,5000,128,96 > /dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  {
+    int w1, h1, c1, w2, h2, c2;
+    std::string f1, f2;  // EXR headers carry a date: compare the pixels
+    EXPECT_TRUE(raw_pixels(dir / "w1.exr", w1, h1, c1, f1) == raw_pixels(dir / "w2.exr", w2, h2, c2, f2));
+  }
+  EXPECT_TRUE(same_file(dir / "w1.png", dir / "w2.png"));
+  // Two windows side by side (64 px each) equal the two halves of the whole region.
+  for (int k = 0; k < 2; ++k) {
+    const auto r = run_proctex(env(dir) + common + "'" + (dir / ("h" + std::to_string(k) + ".exr")).string() +
+                                   "' -o '" + (dir / ("h" + std::to_string(k) + ".png")).string() + "' --window " +
+                                   std::to_string(-300 + 64 * k) + ",5000,64,96",
+                               dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  int w, h, c;
+  std::string f;
+  const auto whole = raw_pixels(dir / "w1.exr", w, h, c, f);
+  ASSERT_EQ(w, 128);
+  for (int k = 0; k < 2; ++k) {
+    int hw, hh, hc;
+    const auto half = raw_pixels(dir / ("h" + std::to_string(k) + ".exr"), hw, hh, hc, f);
+    ASSERT_EQ(hw, 64);
+    for (int y = 0; y < 96; ++y)
+      for (int x = 0; x < 64; ++x)
+        for (int ch = 0; ch < 2; ++ch)
+          ASSERT_EQ(half[(static_cast<size_t>(y) * 64 + x) * hc + ch],
+                    whole[(static_cast<size_t>(y) * 128 + 64 * k + x) * c + ch])
+              << k << " " << x << "," << y;
+  }
+}
+
+TEST(SynthCli, AppliedMapsStayAlignedAndSixteenBitPng) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  // A "height" map that is the exemplar's own red channel inverted, 8-bit.
+  const Image colour = load_image(ex);
+  Image height(colour.width, colour.height);
+  for (size_t i = 0; i < height.pixels.size(); i += 3)
+    for (int c = 0; c < 3; ++c)
+      height.pixels[i + c] = srgb_to_linear(1.0f - linear_to_srgb(colour.pixels[i]));
+  save_image(height, dir / "ex_height.png");
+  const auto r = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "out.png").string() +
+                                 "' --size 96 --apply height='" + (dir / "ex_height.png").string() + "':'" +
+                                 (dir / "out_h.png").string() + "' --apply '" + ex.string() + "':'" +
+                                 (dir / "out16.png").string() + "' --bits 16",
+                             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int w, h, c, w2, h2, c2;
+  std::string f, f2;
+  const auto out = raw_pixels(dir / "out.png", w, h, c, f);
+  const auto map = raw_pixels(dir / "out_h.png", w2, h2, c2, f2);
+  ASSERT_EQ(w, 96);
+  ASSERT_EQ(w2, 96);
+  EXPECT_EQ(f2, "uint16");
+  // Every output pixel's map value is 1 - its red code (to the 16-bit rounding).
+  for (int i = 0; i < w * h; ++i) ASSERT_NEAR(map[i * c2], 1.0f - out[i * c], 1.0f / 255 + 1e-4f) << i;
+}
+
+TEST(SynthCli, TileableOutputRepeatsSeamlessly) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  const auto r = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "tile.png").string() +
+                                 "' --size 128 --tileable --coords '" + (dir / "tile.exr").string() + "'",
+                             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The window one period to the right and down is the same picture.
+  const auto shifted = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "shift.png").string() +
+                                       "' --size 128 --tileable --window 128,-128,128,128",
+                                   dir.path());
+  ASSERT_EQ(shifted.exit_code, 0) << shifted.err;
+  EXPECT_TRUE(same_file(dir / "tile.png", dir / "shift.png"));
+}
+
+TEST(SynthCli, BadInputIsOneLineAndLeavesNoFile) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  const auto tiny = make_exemplar(dir, 12, "tiny.png");
+  const auto other = make_exemplar(dir, 32, "other.png");
+  {
+    Image huge(600, 20, 0.5f);
+    save_image(huge, dir / "huge.png");
+  }
+  {
+    Image nan_image(32, 32, 0.5f);
+    nan_image.pixels[100] = std::numeric_limits<float>::quiet_NaN();
+    save_image(nan_image, dir / "nan.exr");
+  }
+  std::ofstream(dir / "broken.png") << "not a png";
+  const auto before = files_in(dir.path()).size();
+  struct Case {
+    std::string args, expect;
+    int code;
+  };
+  const std::string o = " -o '" + (dir / "out.png").string() + "'";
+  const std::vector<Case> cases = {
+      {"synth '" + (dir / "missing.png").string() + "'" + o, "missing.png", 1},
+      {"synth '" + (dir / "broken.png").string() + "'" + o, "broken.png", 1},
+      {"synth '" + tiny.string() + "'" + o, "smaller than 16", 1},
+      {"synth '" + (dir / "huge.png").string() + "'" + o, "larger than 512", 1},
+      {"synth '" + (dir / "nan.exr").string() + "'" + o, "non-finite", 1},
+      {"synth '" + ex.string() + "'" + o + " --apply '" + other.string() + "':'" + (dir / "m.png").string() + "'",
+       "same size", 1},
+      {"synth '" + ex.string() + "'" + o + " --window 1,2,3", "x,y,w,h", 2},
+      {"synth '" + ex.string() + "'" + o + " --window 0,0,0,10", "out of range", 2},
+      {"synth '" + ex.string() + "'" + o + " --randomness 1,x", "not a number", 2},
+      {"synth '" + ex.string() + "'" + o + " --randomness 9", "outside", 2},
+      {"synth '" + ex.string() + "'" + o + " --randomness 1,1,1,1,1,1,1,1,1,1", "levels", 2},
+      {"synth '" + ex.string() + "'" + o + " --tileable --size 127", "even", 2},
+      {"synth '" + ex.string() + "'" + o + " --coords '" + (dir / "uv.png").string() + "'", ".exr", 2},
+      {"synth '" + ex.string() + "' -o '" + (dir / "nodir" / "out.png").string() + "'", "does not exist", 1},
+      {"synth '" + ex.string() + "' -o '" + (dir / "out.bmpx").string() + "'", "unknown extension", 2},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_proctex(env(dir) + c.args, dir.path());
+    EXPECT_EQ(r.exit_code, c.code) << c.args << "\n" << r.err;
+    EXPECT_EQ(testing::line_count(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("proctex: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  // No output and no temporary left behind (stdout.txt/stderr.txt are the harness's, cache/ the analysis).
+  auto after = files_in(dir.path());
+  std::erase_if(after, [](const std::string& f) { return f == "stdout.txt" || f == "stderr.txt"; });
+  EXPECT_EQ(after.size(), before) << "left: " << ::testing::PrintToString(after);
+}
+
+}  // namespace
+}  // namespace proctex

@@ -1,0 +1,398 @@
+// synth/: the properties of parallel controllable synthesis a user relies on (digest
+// notes/exemplar-synthesis.md, "Testable properties"), on the real OpenCL device (PoCL).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "core/error.h"
+#include "image/image.h"
+#include "synth/analysis.h"
+#include "synth/render.h"
+#include "synth/synthesis.h"
+#include "tests/support/temp_dir.h"
+
+namespace proctex::synth {
+namespace {
+
+// A toroidal exemplar: every row and column continues across the wrap, and every 5x5 neighbourhood
+// is unique (integer hash noise on a smooth periodic pattern).
+Image periodic_exemplar(int m) {
+  Image im(m, m);
+  for (int y = 0; y < m; ++y)
+    for (int x = 0; x < m; ++x) {
+      uint32_t h = static_cast<uint32_t>(x * 73856093u) ^ static_cast<uint32_t>(y * 19349663u);
+      h ^= h >> 13;
+      h *= 0x5bd1e995u;
+      h ^= h >> 15;
+      const float noise = (h & 1023) / 1023.0f;
+      const float wave = 0.5f + 0.25f * std::sin(2 * M_PI * 3 * x / m) * std::cos(2 * M_PI * 2 * y / m);
+      float* p = im.pixel(x, y);
+      p[0] = 0.7f * wave + 0.3f * noise;
+      p[1] = 0.5f * wave + 0.2f * noise;
+      p[2] = 0.3f + 0.4f * noise;
+    }
+  return im;
+}
+
+// A real photo (gravel, CC0, 512^2 grey), reduced to `size` (keeps it quick).
+Image photo(int size) {
+  static const Image full = load_image(std::filesystem::path(PROCTEX_SHARED_DIR) / "textures" / "gravel.png");
+  return resize(crop(full, 0, 0, 256, 256), size, size);
+}
+
+Exemplar exemplar_of(Image im, const std::string& name = "test") {
+  Exemplar ex;
+  ex.name = name;
+  ex.colour = std::move(im);
+  return ex;
+}
+
+const Analysis& periodic_analysis() {
+  static const Analysis a = [] {
+    AnalysisOptions o;
+    o.tiling = Tiling::Toroidal;
+    return analyse(exemplar_of(periodic_exemplar(64)), o);
+  }();
+  return a;
+}
+
+const Analysis& photo_analysis() {
+  static const Analysis a = analyse(exemplar_of(photo(64)));
+  return a;
+}
+
+TEST(SynthAnalysis, LevelsSpacingAndCoherentCandidatesAreDispersed) {
+  const Analysis& a = periodic_analysis();
+  ASSERT_EQ(a.levels, 6);  // 64 = 2^6
+  ASSERT_EQ(static_cast<int>(a.level.size()), 7);
+  EXPECT_TRUE(a.toroidal);
+  for (int l = 0; l <= a.levels; ++l) {
+    EXPECT_EQ(a.level[l].spacing, 1 << (a.levels - l));
+    // k = 2: the second candidate is at least 5% of the size (>= 3 px here) away, toroidally.
+    for (int i = 0; i < 64 * 64; ++i) {
+      const int c = a.level[l].coherent[i];
+      int dx = std::abs(c % 64 - i % 64), dy = std::abs(c / 64 - i / 64);
+      dx = std::min(dx, 64 - dx), dy = std::min(dy, 64 - dy);
+      ASSERT_GE(std::max(dx, dy), 3) << "level " << l << " texel " << i;
+    }
+  }
+  // At the finest level the second candidate should look alike: its neighbourhood distance is far
+  // below the distance to a random texel on average.
+  const auto& lv = a.level[a.levels];
+  double near = 0, random = 0;
+  for (int i = 0; i < 64 * 64; ++i) {
+    const int c = lv.coherent[i], r = (i * 2654435761u) % (64 * 64);
+    for (int k = 0; k < kAppearanceDims; ++k) {
+      near += std::pow(lv.neighbourhood[i * 8 + k] - lv.neighbourhood[c * 8 + k], 2);
+      random += std::pow(lv.neighbourhood[i * 8 + k] - lv.neighbourhood[r * 8 + k], 2);
+    }
+  }
+  EXPECT_LT(near, 0.5 * random);
+}
+
+TEST(SynthAnalysis, SeamDetection) {
+  EXPECT_TRUE(tiles_seamlessly(exemplar_of(periodic_exemplar(64))));
+  // A ramp does not wrap: its last column is far from its first.
+  Image ramp(32, 32);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x)
+      for (int c = 0; c < 3; ++c) ramp.pixel(x, y)[c] = (x + y) / 64.0f;
+  EXPECT_FALSE(tiles_seamlessly(exemplar_of(ramp)));
+  // A tiling brick pattern whose border runs along a mortar line (a sharp but natural step) tiles.
+  Image bricks(64, 64);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const int row = y / 16, bx = (x + (row % 2) * 16) % 32;
+      const bool mortar = y % 16 == 0 || bx == 0;
+      const float n = ((x * 7 + y * 13) % 11) / 110.0f;
+      for (int c = 0; c < 3; ++c) bricks.pixel(x, y)[c] = mortar ? 0.8f : 0.25f + n;
+    }
+  EXPECT_TRUE(tiles_seamlessly(exemplar_of(bricks)));
+  // A crop of a photo does not.
+  EXPECT_FALSE(tiles_seamlessly(exemplar_of(photo(64))));
+}
+
+TEST(SynthAnalysis, CacheRoundTripAndDamagedCacheIsIgnored) {
+  testing::TempDir dir;
+  const Exemplar ex = exemplar_of(photo(32));
+  const Analysis first = analyse_cached(ex, {}, dir.path());
+  EXPECT_FALSE(first.from_cache);
+  const Analysis second = analyse_cached(ex, {}, dir.path());
+  EXPECT_TRUE(second.from_cache);
+  EXPECT_EQ(first.hash, second.hash);
+  for (int l = 0; l <= first.levels; ++l) {
+    EXPECT_EQ(first.level[l].appearance, second.level[l].appearance);
+    EXPECT_EQ(first.level[l].neighbourhood, second.level[l].neighbourhood);
+    EXPECT_EQ(first.level[l].coherent, second.level[l].coherent);
+  }
+  // Truncate the cache file: the next call analyses again (and rewrites it).
+  const auto file = dir.path() / (first.hash + ".bin");
+  ASSERT_TRUE(std::filesystem::exists(file));
+  std::filesystem::resize_file(file, std::filesystem::file_size(file) / 2);
+  const Analysis third = analyse_cached(ex, {}, dir.path());
+  EXPECT_FALSE(third.from_cache);
+  EXPECT_EQ(third.level.back().coherent, first.level.back().coherent);
+  // Another exemplar gets another hash.
+  Image other = photo(32);
+  other.pixel(3, 3)[0] += 0.25f;
+  EXPECT_NE(analyse_cached(exemplar_of(other), {}, dir.path()).hash, first.hash);
+}
+
+TEST(Synth, ZeroRandomnessOnAToroidalExemplarIsTheExactTiling) {
+  Synthesizer s(periodic_analysis());
+  SynthOptions o;
+  o.randomness = {0.0f};
+  const Window w{-37, 1000003, 150, 130};
+  const auto S = s.synthesise(w, o);
+  // S[p] = (p + c) mod 64 for one constant c.
+  const int cx = static_cast<int>(((S[0] - w.x) % 64 + 64) % 64);
+  const int cy = static_cast<int>(((S[1] - w.y) % 64 + 64) % 64);
+  for (int y = 0; y < w.height; ++y)
+    for (int x = 0; x < w.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * w.width + x;
+      ASSERT_EQ(S[2 * i], ((w.x + x + cx) % 64 + 64) % 64) << x << "," << y;
+      ASSERT_EQ(S[2 * i + 1], ((w.y + y + cy) % 64 + 64) % 64) << x << "," << y;
+    }
+}
+
+TEST(Synth, SameSeedSameMapOtherSeedOtherMap) {
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  const Window w{0, 0, 96, 96};
+  const auto a = s.synthesise(w, o);
+  const auto b = s.synthesise(w, o);
+  EXPECT_EQ(a, b);
+  o.seed = 2;
+  const auto c = s.synthesise(w, o);
+  size_t differ = 0;
+  for (size_t i = 0; i < a.size(); i += 2) differ += a[i] != c[i] || a[i + 1] != c[i + 1];
+  EXPECT_GT(differ, a.size() / 2 / 2) << "another seed should change most of the map";
+}
+
+// Copies the window `part` out of a synthesis of `whole` (both on the same plane).
+std::vector<int32_t> cut(const std::vector<int32_t>& S, const Window& whole, const Window& part) {
+  std::vector<int32_t> out;
+  for (int y = 0; y < part.height; ++y)
+    for (int x = 0; x < part.width; ++x) {
+      const size_t i = static_cast<size_t>(part.y - whole.y + y) * whole.width + (part.x - whole.x + x);
+      out.push_back(S[2 * i]);
+      out.push_back(S[2 * i + 1]);
+    }
+  return out;
+}
+
+TEST(Synth, AnyWindowEqualsTheSameRegionOfALargerSynthesis) {
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  o.seed = 77;
+  o.randomness = {1.0f, 0.8f, 0.6f, 0.4f, 0.3f};
+  for (const int64_t ox : {int64_t(0), int64_t(-123457), int64_t(1) << 40, -(int64_t(1) << 50) + 3}) {
+    const Window whole{ox, -ox / 3 - 5, 256, 192};
+    const auto big = s.synthesise(whole, o);
+    // 16 windows of 64 x 48 tile the big one exactly.
+    for (int ty = 0; ty < 4; ++ty)
+      for (int tx = 0; tx < 4; ++tx) {
+        const Window part{whole.x + 64 * tx, whole.y + 48 * ty, 64, 48};
+        ASSERT_EQ(s.synthesise(part, o), cut(big, whole, part)) << "offset " << ox << " tile " << tx << "," << ty;
+      }
+    // Odd offsets and sizes, a single pixel, a single row.
+    for (const Window part : {Window{whole.x + 17, whole.y + 33, 101, 57}, Window{whole.x + 255, whole.y + 191, 1, 1},
+                              Window{whole.x + 3, whole.y + 100, 250, 1}}) {
+      ASSERT_EQ(s.synthesise(part, o), cut(big, whole, part)) << "offset " << ox;
+    }
+  }
+}
+
+// Fraction of horizontally adjacent pixel pairs whose coordinates continue the exemplar (a
+// verbatim-copied patch); `column` < 0 means every column, else only pairs (column, column + 1).
+double coherence(const std::vector<int32_t>& S, int w, int h, int ew, int column = -1) {
+  long coherent = 0, total = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x + 1 < w; ++x) {
+      if (column >= 0 && x != column) continue;
+      const size_t i = static_cast<size_t>(y) * w + x;
+      coherent += S[2 * i + 2] == (S[2 * i] + 1) % ew && S[2 * i + 3] == S[2 * i + 1];
+      ++total;
+    }
+  return double(coherent) / total;
+}
+
+TEST(Synth, OutputIsNeitherATilingNorNoise) {
+  Synthesizer s(photo_analysis());
+  const Window w{0, 0, 192, 192};
+  const auto S = s.synthesise(w, {});
+  const double c = coherence(S, w.width, w.height, 64);
+  EXPECT_LT(c, 0.97) << "default randomness must break the tiling";
+  EXPECT_GT(c, 0.35) << "synthesis should copy coherent patches, not scatter single texels";
+  // Patches come from all over the exemplar: every 8x8 block of the exemplar is used.
+  std::set<int> blocks;
+  for (size_t i = 0; i < S.size(); i += 2) blocks.insert(S[i] / 8 + 8 * (S[i + 1] / 8));
+  EXPECT_GE(blocks.size(), 56u);
+}
+
+TEST(Synth, TileableOutputWrapsWithoutASeam) {
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  o.period_x = 128;
+  o.period_y = 128;
+  o.seed = 5;
+  // The plane is periodic: the window [0, 256) is four copies of [0, 128).
+  const auto S = s.synthesise({0, 0, 256, 256}, o);
+  const auto tile = s.synthesise({0, 0, 128, 128}, o);
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x) {
+      const size_t i = static_cast<size_t>(y) * 256 + x, j = static_cast<size_t>(y % 128) * 128 + x % 128;
+      ASSERT_EQ(S[2 * i], tile[2 * j]);
+      ASSERT_EQ(S[2 * i + 1], tile[2 * j + 1]);
+    }
+  // No seam: pairs across the wrap (column 127 -> 128) continue patches about as often as inner pairs.
+  const double inner = coherence(S, 256, 256, 64);
+  const double seam = coherence(S, 256, 256, 64, 127);
+  EXPECT_GT(seam, 0.6 * inner) << "inner " << inner << " seam " << seam;
+  // And a period that is not a multiple of 2 is refused.
+  o.period_x = o.period_y = 127;
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
+}
+
+TEST(Synth, BoundedExemplarIsNotCopiedAcrossItsBorder) {
+  // A photo crop does not tile; patches must not run from its right edge into its left edge.
+  const Analysis& a = photo_analysis();
+  ASSERT_FALSE(a.toroidal);
+  Synthesizer s(a);
+  const Window w{0, 0, 256, 256};
+  const auto S = s.synthesise(w, {});
+  long across = 0, pairs = 0;
+  for (int y = 0; y < w.height; ++y)
+    for (int x = 0; x + 1 < w.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * w.width + x;
+      across += S[2 * i] == 63 && S[2 * i + 2] == 0 && S[2 * i + 3] == S[2 * i + 1];
+      ++pairs;
+    }
+  // Inside the exemplar a column boundary is continued ~coherence * pairs / 64 times; across the
+  // border it must be much rarer.
+  const double per_column = coherence(S, w.width, w.height, 64) * pairs / 64.0;
+  EXPECT_LT(across, 0.25 * per_column) << across << " vs " << per_column;
+}
+
+TEST(Synth, ApplyMapsStayAligned) {
+  // A map that is a function of the colour stays that function of the output colour.
+  Exemplar ex = exemplar_of(photo(64));
+  ExemplarMap m;
+  m.name = "inverse";
+  m.kind = MapKind::Grey;
+  m.image = Image(64, 64);
+  for (size_t i = 0; i < m.image.pixels.size(); ++i) m.image.pixels[i] = 1.0f - ex.colour.pixels[i];
+  ex.maps.push_back(m);
+  const Analysis a = analyse(ex);
+  Synthesizer s(a);
+  const Window w{5, 9, 100, 80};
+  testing::TempDir dir;
+  RenderOutputs out;
+  out.colour = dir / "c.exr";
+  out.maps = {dir / "m.exr"};
+  out.coords = dir / "uv.exr";
+  render(s, ex, w, {}, out, {}, 100 * 17);  // strips of 17 rows
+  const Image c = load_image(out.colour), mm = load_image(out.maps[0]), uv = load_image(out.coords);
+  ASSERT_EQ(c.width, 100);
+  ASSERT_EQ(mm.height, 80);
+  const auto S = s.synthesise(w, {});
+  for (size_t i = 0; i < static_cast<size_t>(100 * 80); ++i) {
+    ASSERT_NEAR(c.pixels[3 * i] + mm.pixels[3 * i], 1.0f, 2e-3f) << i;
+    ASSERT_EQ(uv.pixels[3 * i], S[2 * i]);
+    ASSERT_EQ(uv.pixels[3 * i + 1], S[2 * i + 1]);
+  }
+}
+
+}  // namespace
+}  // namespace proctex::synth
+
+namespace proctex::synth {
+namespace {
+
+TEST(Synth, JitterMapScalesTheRandomnessWhereItIsPainted) {
+  Synthesizer s(photo_analysis());
+  const Window w{-40, 30, 128, 96};
+  SynthOptions o;
+  o.randomness = {1.0f, 1.0f, 0.6f, 0.3f};
+  const auto plain = s.synthesise(w, o);
+  SynthOptions white = o, black = o, none = o;
+  white.jitter_map.assign(8 * 8, 255);
+  white.jitter_map_width = white.jitter_map_height = 8;
+  black.jitter_map.assign(8 * 8, 0);
+  black.jitter_map_width = black.jitter_map_height = 8;
+  none.randomness = {0.0f};
+  EXPECT_EQ(s.synthesise(w, white), plain);       // white = the randomness as given
+  EXPECT_EQ(s.synthesise(w, black), s.synthesise(w, none));  // black = no jitter at all
+  // Half painted: the map still gives the same pixels for any window (it tiles the plane).
+  SynthOptions half = o;
+  half.jitter_map_width = half.jitter_map_height = 64;
+  half.jitter_map.resize(64 * 64);
+  for (int i = 0; i < 64 * 64; ++i) half.jitter_map[i] = (i % 64) < 32 ? 0 : 255;
+  const auto whole = s.synthesise(w, half);
+  const Window part{w.x + 37, w.y + 11, 50, 40};
+  std::vector<int32_t> cut_out;
+  for (int y = 0; y < part.height; ++y)
+    for (int x = 0; x < part.width; ++x) {
+      const size_t i = static_cast<size_t>(part.y - w.y + y) * w.width + (part.x - w.x + x);
+      cut_out.push_back(whole[2 * i]);
+      cut_out.push_back(whole[2 * i + 1]);
+    }
+  EXPECT_EQ(s.synthesise(part, half), cut_out);
+  EXPECT_NE(whole, plain);
+  SynthOptions bad = o;
+  bad.jitter_map.assign(10, 1);
+  bad.jitter_map_width = 4;
+  bad.jitter_map_height = 4;
+  EXPECT_THROW(s.synthesise(w, bad), UsageError);
+}
+
+}  // namespace
+}  // namespace proctex::synth
+
+namespace proctex::synth {
+namespace {
+
+TEST(Synth, PastedFeatureIsCopiedVerbatimAtItsPosition) {
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  o.seed = 4;
+  o.pastes.push_back({10, 12, 30, 24, 1000, -500});  // exemplar (10,12) 30x24 -> plane (1000,-500)
+  const Window w{960, -540, 128, 100};
+  const auto S = s.synthesise(w, o);
+  int exact = 0, inner = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 30; ++x) {
+      const size_t i = static_cast<size_t>(-500 - w.y + y) * w.width + (1000 - w.x + x);
+      const bool is_exact = S[2 * i] == 10 + x && S[2 * i + 1] == 12 + y;
+      exact += is_exact;
+      if (x >= 4 && x < 26 && y >= 4 && y < 20) {  // the border band is blended by correction
+        ++inner;
+        EXPECT_TRUE(is_exact) << x << "," << y << " -> " << S[2 * i] << "," << S[2 * i + 1];
+      }
+    }
+  EXPECT_GT(inner, 0);
+  EXPECT_GE(exact, 30 * 24 * 8 / 10) << "most of the rectangle, border included, is verbatim";
+  // Without the paste that region is something else; a window of the pasted plane is exact too.
+  SynthOptions plain = o;
+  plain.pastes.clear();
+  EXPECT_NE(s.synthesise(w, plain), S);
+  const Window part{990, -510, 40, 30};
+  std::vector<int32_t> cut_out;
+  for (int y = 0; y < part.height; ++y)
+    for (int x = 0; x < part.width; ++x) {
+      const size_t i = static_cast<size_t>(part.y - w.y + y) * w.width + (part.x - w.x + x);
+      cut_out.push_back(S[2 * i]);
+      cut_out.push_back(S[2 * i + 1]);
+    }
+  EXPECT_EQ(s.synthesise(part, o), cut_out);
+  SynthOptions bad = o;
+  bad.pastes = {{50, 50, 30, 30, 0, 0}};  // leaves the 64 px exemplar
+  EXPECT_THROW(s.synthesise(w, bad), UsageError);
+}
+
+}  // namespace
+}  // namespace proctex::synth
