@@ -178,9 +178,12 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   auto o = std::make_shared<MatchCliOptions>();
   auto* cmd = app.add_subcommand("match", "Find the shader and parameters that reproduce a photo");
   cmd->footer(
-      "Scores every catalogue sample (proctex catalog build) by structure, fits the colours of the best\n"
-      "samples of each shader and scores them again, then refines the best starts with NLopt.\n"
-      "Verdict: good (similarity >= 0.5), approximate (>= 0.25), no-match. See docs/search.md.\n"
+      "Decides which materials the photo is likely to be (a classifier over its statistics at several\n"
+      "scales, plus the nearest catalogue samples), fits the colours of the best samples of the likely\n"
+      "shaders, refines the best starts with NLopt (and polishes clean patterns exactly), and keeps the\n"
+      "result that is both similar and a likely material.\n"
+      "Verdict: good (similarity >= 0.5 and the material at least 95% likely, or similarity >= 0.75),\n"
+      "approximate (>= 0.25), no-match (no shader expresses the photo). See docs/search.md.\n"
       "  proctex match brick.png --render match.png --size 4096 --compare cmp.png\n"
       "  proctex match wall.jpg --shaders bricks,tiles --fix rows=8 --budget 20s -o result.json\n"
       "Ctrl-C stops the search and returns the best match so far.");
@@ -188,7 +191,7 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--db", o->db, "Catalogue (default: $PROCTEX_CATALOG or ~/.cache/proctex/catalog.sqlite)");
   cmd->add_option("--crop", o->crop, "Use only this part of the photo: x,y,w,h (default: the whole photo, centre square)");
   cmd->add_option("--shaders", o->shaders, "Only these shaders, comma-separated (your knowledge of the material)");
-  cmd->add_option("--candidates", o->candidates, "Shaders screened: the best M by their best catalogue sample's structure (0: all, slower)")->capture_default_str()->check(CLI::Range(0, 100000));
+  cmd->add_option("--candidates", o->candidates, "Shaders screened: the M most likely materials by the shader selection (0: all, slower)")->capture_default_str()->check(CLI::Range(0, 100000));
   cmd->add_option("--screen", o->screen, "Best catalogue samples per shader whose colours are fitted and scored")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--screen-resolution", o->screen_resolution, "Resolution of the screening renders (smaller is faster but loses thin structure)")->capture_default_str()->check(CLI::Range(64, 1024));
   cmd->add_option("--threshold", o->threshold, "Also screen every shader whose selection probability (the evidence for its material) reaches this")->check(CLI::Range(0.0, 1.0));

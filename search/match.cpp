@@ -341,7 +341,12 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const int race = std::max(o.starts, o.race);
   std::vector<Lane> lanes;
   std::vector<std::string> by_structure;
-  for (int c : chosen) by_structure.push_back(scans[c].catalogue.shader);  // `chosen` is in structural order
+  // The structural lanes follow the structural scan (the nearest catalogue samples), not the
+  // selection: the race then holds both kinds of evidence.
+  std::vector<int> structural_order = chosen;
+  std::stable_sort(structural_order.begin(), structural_order.end(),
+                   [&](int a, int b) { return scans[a].best_full > scans[b].best_full; });
+  for (int c : structural_order) by_structure.push_back(scans[c].catalogue.shader);
   for (auto& st : choose_race(screened, by_structure, race)) {
     Lane lane;
     lane.decl = &library.get(st.shader);
@@ -399,14 +404,16 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const long short_run = std::max<long>(30, o.refine.max_evaluations / 5);
   for (size_t i = 0; i < lanes.size(); ++i)
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
-  // Finalists by the similarity the race reached, weighed with the selection's probability of the
-  // shader: a flexible shader that tunes itself into a look-alike must also be a likely material.
+  // The final choice weighs the similarity with the selection's probability of the shader: a
+  // flexible shader that tunes itself into a look-alike must also be a likely material.
   auto decision = [&](double similarity, double probability) {
     return std::log(std::max(similarity, 1e-9)) + o.selection_weight * std::log(std::max(probability, 1e-9));
   };
-  std::stable_sort(lanes.begin(), lanes.end(), [&](const Lane& a, const Lane& b) {
-    return decision(a.refined.similarity, a.start.probability) > decision(b.refined.similarity, b.start.probability);
-  });
+  // Finalists by the similarity the race reached: the short race is too noisy to weigh the
+  // selection in here (a 4-pointed star's best lane is third after two circles, measured); the
+  // final choice below does.
+  std::stable_sort(lanes.begin(), lanes.end(),
+                   [](const Lane& a, const Lane& b) { return a.refined.similarity > b.refined.similarity; });
   const size_t finalists = std::min<size_t>(lanes.size(), std::max(1, o.starts));
   for (size_t i = 0; i < finalists; ++i)
     run_lane(lanes[i], std::max<long>(1, o.refine.max_evaluations - lanes[i].objective->evaluations()),
@@ -460,7 +467,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     // magnitude can. Kept only if the default similarity agrees that it is better.
     const auto t_polish = Clock::now();
     nlohmann::json polish = {{"peakiness", peakiness}};
-    if (o.polish_evaluations > 0 && !(stop && *stop)) {
+    // What is left of an evaluation budget (--budget N): the polish never overspends it.
+    const long budget_left = o.budget.max_evaluations > 0 ? o.budget.max_evaluations - evaluations : o.polish_evaluations;
+    if (o.polish_evaluations > 0 && budget_left > 10 && !(stop && *stop)) {
       std::vector<std::string> pinned;
       const std::vector<float> packed = apply_fixed(*rf.decl, rf.packed, o.fixed, pinned);
       polish["deterministic"] = nearly_deterministic(renderer, *rf.decl, packed, rf.seed);
@@ -468,8 +477,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       if (polish["deterministic"] || peakiness >= kPatternPeakiness) {
         const ParameterSpace space(*rf.decl, packed, pinned);
         Objective objective(space, target_magnitude, magnitude, renderer, rf.seed, o.coarse_resolution);
-        if (o.budget.max_seconds > 0)
-          objective.set_budget({0, std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6)});
+        objective.set_budget({std::min(budget_left, o.polish_evaluations),
+                              o.budget.max_seconds > 0 ? std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6) : 0.0});
         objective.on_progress = [&](const Objective& obj) {
           if (stop && *stop) objective.stop();
           state.evaluations = evaluations + obj.evaluations();
@@ -503,8 +512,11 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     result.starts[i]["polish"] = polish;
     polish_seconds += seconds_since(t_polish);
 
-    if (decision(s, rf.probability) > best) {
-      best = decision(s, rf.probability);
+    // A near-certain similarity wins outright (the verdict's kCertainMatch); otherwise similarity
+    // and selection decide together.
+    const double score = s >= kCertainMatch ? 1e6 + s : decision(s, rf.probability);
+    if (score > best) {
+      best = score;
       result.probability = rf.probability;
       result.spec = spec_from_packed(*rf.decl, rf.packed, rf.seed);
       result.similarity = s;

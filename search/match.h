@@ -37,10 +37,11 @@ inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unr
 // "good" also needs the shader selection (selection.h) to find the material likely: the
 // threshold on its probability was calibrated on the labelled real photos (docs/match-evaluation.md).
 inline constexpr double kGoodProbability = selection_model::kGoodProbability;
-// ... unless the similarity alone is far above what a look-alike reaches: sister shaders refined
-// against photos and random targets stayed below 0.75 (docs/match-evaluation.md), an exact
-// recovery of a pattern scores about 0.9.
-inline constexpr double kCertainMatch = 0.85;
+// ... unless the similarity alone is above what a look-alike reaches: wrong materials refined
+// against the labelled photos stayed below 0.70 and sister shaders against random targets below
+// 0.75 (docs/match-evaluation.md); an exact recovery of a pattern scores 0.75-0.95. It also wins
+// the final choice outright.
+inline constexpr double kCertainMatch = 0.75;
 // The final choice among the finalists maximises log S + kSelectionWeight * log P(shader): the
 // similarity as a likelihood and the selection as the prior, with equal say.
 inline constexpr double kSelectionWeight = 1.0;
