@@ -409,12 +409,31 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   auto decision = [&](double similarity, double probability) {
     return std::log(std::max(similarity, 1e-9)) + o.selection_weight * std::log(std::max(probability, 1e-9));
   };
-  // Finalists by the similarity the race reached: the short race is too noisy to weigh the
-  // selection in here (a 4-pointed star's best lane is third after two circles, measured); the
-  // final choice below does.
+  // Finalists: the best `starts` lanes by similarity and selection together, and the best `starts`
+  // lanes by the similarity the race reached alone (fewer when they coincide). Either order alone
+  // lost a right answer (measured): by the race's similarity the gravel photo's gravel lane lost to
+  // grass and cracked_mud look-alikes; weighed with the selection, the 4-pointed star's best lane
+  // came third after two circles. The picked lanes lead `lanes`, in similarity order.
   std::stable_sort(lanes.begin(), lanes.end(),
                    [](const Lane& a, const Lane& b) { return a.refined.similarity > b.refined.similarity; });
-  const size_t finalists = std::min<size_t>(lanes.size(), std::max(1, o.starts));
+  size_t finalists = 0;
+  {
+    const size_t k = std::min<size_t>(lanes.size(), std::max(1, o.starts));
+    std::vector<size_t> by_decision(lanes.size());
+    for (size_t i = 0; i < lanes.size(); ++i) by_decision[i] = i;
+    std::stable_sort(by_decision.begin(), by_decision.end(), [&](size_t a, size_t b) {
+      return decision(lanes[a].refined.similarity, lanes[a].start.probability) >
+             decision(lanes[b].refined.similarity, lanes[b].start.probability);
+    });
+    std::vector<bool> pick(lanes.size(), false);
+    for (size_t i = 0; i < k; ++i) pick[by_decision[i]] = pick[i] = true;
+    std::vector<Lane> ordered;
+    for (int picked = 1; picked >= 0; --picked)
+      for (size_t i = 0; i < lanes.size(); ++i)
+        if (pick[i] == bool(picked)) ordered.push_back(std::move(lanes[i]));
+    lanes = std::move(ordered);
+    finalists = static_cast<size_t>(std::count(pick.begin(), pick.end(), true));
+  }
   for (size_t i = 0; i < finalists; ++i)
     run_lane(lanes[i], std::max<long>(1, o.refine.max_evaluations - lanes[i].objective->evaluations()),
              "refine " + std::to_string(i + 1) + "/" + std::to_string(finalists));
