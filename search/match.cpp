@@ -177,8 +177,8 @@ double spectral_peakiness(const metrics::Features& magnitude) {
 
 }  // namespace
 
-std::string verdict_for(double s, double probability) {
-  if (s >= kCertainMatch || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
+std::string verdict_for(double s, double probability, bool pattern) {
+  if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
   if (s >= kApproximateMatch) return "approximate";
   return "no-match";
 }
@@ -208,6 +208,7 @@ nlohmann::json MatchResult::to_json() const {
           {"candidates", cands},     {"starts", starts},           {"timings", timings},
           {"catalogue", catalogue},
           {"selection_probability", probability},
+          {"pattern", pattern},
           {"polish", polish},
           {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}}},
           {"thresholds", {{"good", kGoodMatch}, {"good_probability", kGoodProbability}, {"approximate", kApproximateMatch}}}};
@@ -533,7 +534,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
 
     // A near-certain similarity wins outright (the verdict's kCertainMatch); otherwise similarity
     // and selection decide together.
-    const double score = s >= kCertainMatch ? 1e6 + s : decision(s, rf.probability);
+    const bool pattern = peakiness >= kPatternPeakiness;
+    const double score = pattern && s >= kCertainMatch ? 1e6 + s : decision(s, rf.probability);
     if (score > best) {
       best = score;
       result.probability = rf.probability;
@@ -549,7 +551,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   result.timings["polish"] = polish_seconds;  // included in "final"
   result.timings["final"] = seconds_since(t_final);
   result.evaluations = evaluations;
-  result.verdict = verdict_for(result.similarity, result.probability);
+  result.pattern = peakiness >= kPatternPeakiness;
+  result.verdict = verdict_for(result.similarity, result.probability, result.pattern);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above
   nlohmann::json names = nlohmann::json::array();

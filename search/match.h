@@ -37,17 +37,17 @@ inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unr
 // "good" also needs the shader selection (selection.h) to find the material likely: the
 // threshold on its probability was calibrated on the labelled real photos (docs/match-evaluation.md).
 inline constexpr double kGoodProbability = selection_model::kGoodProbability;
-// ... unless the similarity alone is above what a look-alike reaches: wrong materials refined
-// against the labelled photos stayed below 0.70 and sister shaders against random targets below
-// 0.75 (docs/match-evaluation.md); an exact recovery of a pattern scores 0.75-0.95. It also wins
-// the final choice outright.
+// ... or, for a clean pattern (a peaky spectrum: tilings, shapes; never a photo of a material), a
+// similarity an exact recovery reaches (0.75-0.95). On photos wrong materials reached 0.76
+// (measured on the labelled set), so there the similarity alone never makes a match good. Such a
+// pattern match also wins the final choice outright.
 inline constexpr double kCertainMatch = 0.75;
 // The final choice among the finalists maximises log S + kSelectionWeight * log P(shader): the
 // similarity as a likelihood and the selection as the prior, with equal say.
 inline constexpr double kSelectionWeight = 1.0;
 
-// "good", "approximate" or "no-match".
-std::string verdict_for(double similarity, double probability);
+// "good", "approximate" or "no-match". `pattern`: the target is a clean pattern (see MatchResult).
+std::string verdict_for(double similarity, double probability, bool pattern);
 
 // Candidate shaders screened by default: the structural scan of the catalogue (full-resolution
 // features, no rendering) puts the right shader among its first few; screening costs renders.
@@ -83,6 +83,7 @@ struct MatchResult {
   TextureSpec spec;
   double similarity = 0.0;                  // default metric at `resolution`
   double probability = 0.0;                 // selection probability of the matched shader
+  bool pattern = false;                     // the target is a clean pattern (peaky spectrum)
   std::map<std::string, double> per_metric;  // components of the default metric
   std::string verdict;
   long evaluations = 0;

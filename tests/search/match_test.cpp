@@ -192,7 +192,7 @@ TEST(Match, ReportedSimilarityIsReproducibleFromTheSpec) {
   const metrics::Metric& m = metrics::default_metric();
   const double again = m.similarity(m.features(target, 256), m.features(render(r.spec), 256));
   EXPECT_NEAR(again, r.similarity, 1e-6) << describe(r);
-  EXPECT_EQ(r.verdict, verdict_for(r.similarity, r.probability));
+  EXPECT_EQ(r.verdict, verdict_for(r.similarity, r.probability, r.pattern));
 }
 
 // Targets no shader of the library can express. A verdict only means something if a failed match
@@ -285,7 +285,8 @@ TEST_F(MatchCli, JsonResultRenderAndCompare) {
   const double p = j["selection_probability"];
   EXPECT_GE(p, 0.0);
   EXPECT_LE(p, 1.0);
-  EXPECT_EQ(j["verdict"], s >= kCertainMatch || (s >= 0.5 && p >= kGoodProbability) ? "good"
+  const bool pattern = j["pattern"];
+  EXPECT_EQ(j["verdict"], (pattern && s >= kCertainMatch) || (s >= 0.5 && p >= kGoodProbability) ? "good"
                          : s >= 0.25                                             ? "approximate"
                                                                                  : "no-match");
   EXPECT_GT(j["timings"]["total"].get<double>(), 0.0);
