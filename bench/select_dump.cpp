@@ -60,6 +60,26 @@ int main(int argc, char** argv) {
     std::ifstream in(list);
     std::string line;
     std::vector<double> groups(composite->group_count());
+    // One target's rows: best structural similarity per shader, features, group distances per sample.
+    auto write_structural = [&](const metrics::Features& f) {
+      for (const auto& cat : cats) {
+        float best = 0;
+        for (const auto& sample : cat.samples)
+          best = std::max(best, float(search::structural_similarity(metric, f, sample.features.values)));
+        structural.write(reinterpret_cast<const char*>(&best), sizeof best);
+      }
+    };
+    auto write_target = [&](const metrics::Features& f) {
+      targ.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
+      for (const auto& cat : cats)
+        for (const auto& sample : cat.samples) {
+          composite->group_distances(f.values, sample.features.values, groups.data());
+          for (double d : groups) {
+            const float v = static_cast<float>(d);
+            dist.write(reinterpret_cast<const char*>(&v), sizeof v);
+          }
+        }
+    };
     int n = 0;
     while (std::getline(in, line)) {
       if (line.empty() || line[0] == '#') continue;
@@ -73,25 +93,10 @@ int main(int argc, char** argv) {
       const auto views = search::target_views(photo);
       nlohmann::json entry = {{"path", path}, {"accepted", accepted}, {"split", split}, {"kind", kind},
                               {"scales", views.size()}};
-      const auto whole = metric.features(photo, 256);
-      for (const auto& cat : cats) {
-        float best = 0;
-        for (const auto& sample : cat.samples)
-          best = std::max(best, float(search::structural_similarity(metric, whole, sample.features.values)));
-        structural.write(reinterpret_cast<const char*>(&best), sizeof best);
-      }
+      write_structural(metric.features(photo, 256));
       for (const auto& view : views) {
-        const auto f = metric.features(view.image, 256);
-        targ.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
+        write_target(metric.features(view.image, 256));
         entry["views"].push_back(view.name);
-        for (const auto& cat : cats)
-          for (const auto& sample : cat.samples) {
-            composite->group_distances(f.values, sample.features.values, groups.data());
-            for (double d : groups) {
-              const float v = static_cast<float>(d);
-              dist.write(reinterpret_cast<const char*>(&v), sizeof v);
-            }
-          }
       }
       index["photos"].push_back(entry);
       std::fprintf(stderr, "\r%d photos", ++n);
@@ -104,21 +109,8 @@ int main(int argc, char** argv) {
         const auto cat2 = other.load(s.name, false);
         for (size_t k = 0; k < cat2.samples.size(); ++k) {
           const auto& f = cat2.samples[k].features;
-          for (const auto& cat : cats) {
-            float best = 0;
-            for (const auto& sample : cat.samples)
-              best = std::max(best, float(search::structural_similarity(metric, f, sample.features.values)));
-            structural.write(reinterpret_cast<const char*>(&best), sizeof best);
-          }
-          targ.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
-          for (const auto& cat : cats)
-            for (const auto& sample : cat.samples) {
-              composite->group_distances(f.values, sample.features.values, groups.data());
-              for (double d : groups) {
-                const float v = static_cast<float>(d);
-                dist.write(reinterpret_cast<const char*>(&v), sizeof v);
-              }
-            }
+          write_structural(f);
+          write_target(f);
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
         }
