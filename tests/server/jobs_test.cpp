@@ -103,7 +103,9 @@ TEST_F(Jobs, MatchStreamsProgressAndPreviewsThenGivesTheResultAndItsFiles) {
     }
   }
   EXPECT_GE(previews, 2) << "the preview follows the best match";
-  EXPECT_TRUE(stages.count("glob") && stages.count("race")) << "stages are reported";
+  // The global search shows as "global" and, when its screening ends, "screened" (one may fall
+  // between two samples of the stream).
+  EXPECT_TRUE((stages.count("glob") || stages.count("scre")) && stages.count("race")) << "stages are reported: " << ::testing::PrintToString(stages);
   // At least twice a second while the match runs.
   ASSERT_GE(running_times.size(), 2u);
   const double span = running_times.back() - running_times.front();
