@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -173,6 +174,56 @@ double spectral_peakiness(const metrics::Features& magnitude) {
   for (size_t i = 0; i < energy.size(); ++i) (i < top ? strong : total) += energy[i];
   total += strong;
   return total > 0 ? strong / total : 0.0;
+}
+
+// The other race lanes' end points of a shader, as unit points of the polish's space. A race on
+// the statistical metric can end in an alias of the pattern (a clean running-bond target ended as
+// an English bond at ratio 3.8) that no local search leaves, while another lane of the same shader
+// ended near the truth.
+std::vector<std::vector<double>> lane_end_units(const ParameterSpace& space, const ShaderDecl& decl,
+                                                const std::vector<std::pair<const ShaderDecl*, std::vector<float>>>& lane_ends,
+                                                const std::vector<float>& own, const std::map<std::string, nlohmann::json>& fixed) {
+  std::vector<std::vector<double>> units;
+  for (const auto& [d, point] : lane_ends)
+    if (d == &decl && point != own) {
+      std::vector<std::string> pinned;
+      units.push_back(space.to_unit(apply_fixed(decl, point, fixed, pinned)));
+    }
+  return units;
+}
+
+// The polish's search: short runs from the shader's refined point and the nearest other lane end
+// points (by magnitude); the best gets the rest of the budget.
+RefineResult polish_pattern(Objective& objective, const std::vector<double>& own,
+                            const std::vector<std::vector<double>>& lane_points, RefineOptions options,
+                            nlohmann::json& report) {
+  constexpr size_t kLanes = 2;
+  std::vector<std::vector<double>> starts = {own};
+  if (!lane_points.empty()) {
+    const auto similarity = objective.evaluate(lane_points);
+    std::vector<size_t> order(lane_points.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return similarity[a] > similarity[b]; });
+    for (size_t i = 0; i < std::min(kLanes, order.size()); ++i) starts.push_back(lane_points[order[i]]);
+  }
+  const long total = options.max_evaluations;
+  options.max_evaluations = std::max<long>(1, total / long(2 * starts.size()));
+  RefineResult best;
+  nlohmann::json tried = nlohmann::json::array();
+  for (const auto& start : starts) {
+    if (objective.exhausted()) break;
+    const auto attempt = refine(objective, start, options);
+    tried.push_back(attempt.similarity);
+    if (best.unit.empty() || attempt.similarity > best.similarity) best = attempt;
+  }
+  if (best.unit.empty()) best = {own, objective.evaluate(own), 0, 0};
+  options.max_evaluations = std::max<long>(1, total - objective.evaluations());
+  if (!objective.exhausted()) {
+    const auto more = refine(objective, best.unit, options);
+    if (more.similarity >= best.similarity) best = more;
+  }
+  report["starts"] = tried;
+  return best;
 }
 
 }  // namespace
@@ -463,89 +514,126 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   }
   result.timings["local"] = seconds_since(t_local);
 
-  // 4. Final scoring at the full resolution: the coarse optimum of each finalist, after an exact
-  // polish when the target is a clean pattern (5.), then the choice weighed with the selection.
+  // 4. Final scoring at the full resolution: the coarse optimum of each finalist; then, when the
+  // target is a clean pattern, an exact polish per finalist shader (5.) whose result competes as
+  // one more candidate; the choice weighs similarity with the selection.
   report("final");
   const auto t_final = Clock::now();
-  double best = -1e300;
   RenderSettings full;
   full.width = full.height = o.resolution;
   static const metrics::MagnitudeMetric magnitude;
   const metrics::Features target_magnitude = magnitude.features(target, o.coarse_resolution);
   const double peakiness = spectral_peakiness(target_magnitude);
-  double polish_seconds = 0;
+  const bool pattern = peakiness >= kPatternPeakiness;
+  struct Candidate {
+    const Refined* from;
+    std::vector<float> packed;
+    double similarity;
+    metrics::Features features;
+    nlohmann::json polish;
+  };
+  std::vector<Candidate> final_candidates;
   for (size_t i = 0; i < refined.size(); ++i) {
-    auto& rf = refined[i];
+    const auto& rf = refined[i];
     const Image img = renderer.render_batch(*rf.decl, {rf.packed}, {rf.seed}, full).front();
     metrics::Features f = metric.features(img, o.resolution);
-    double s = metric.similarity(target_full, f);
+    const double s = metric.similarity(target_full, f);
     ++evaluations;
     result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
+    final_candidates.push_back({&rf, rf.packed, s, std::move(f), nlohmann::json::object()});
+  }
 
-    // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
-    // cannot tell 7 from 8 brick courses or a bond from its alias well; the whole Fourier
-    // magnitude can. Kept only if the default similarity agrees that it is better.
-    const auto t_polish = Clock::now();
+  // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
+  // cannot tell 7 from 8 brick courses or a bond from its alias well; the whole Fourier
+  // magnitude can. Once per shader, from the shader's best finalist.
+  const auto t_polish = Clock::now();
+  std::vector<std::pair<const ShaderDecl*, std::vector<float>>> lane_ends;  // every race lane's end point
+  for (const auto& lane : lanes) lane_ends.push_back({lane.decl, lane.space->to_packed(lane.refined.unit)});
+  const size_t finalist_count = final_candidates.size();
+  std::set<const ShaderDecl*> polished_shaders;
+  for (size_t i = 0; i < finalist_count; ++i) {
+    const Refined& rf = *final_candidates[i].from;
+    if (polished_shaders.count(rf.decl)) continue;
+    size_t best_of_shader = i;
+    for (size_t k = 0; k < finalist_count; ++k)
+      if (final_candidates[k].from->decl == rf.decl &&
+          final_candidates[k].similarity > final_candidates[best_of_shader].similarity)
+        best_of_shader = k;
+    polished_shaders.insert(rf.decl);
+    const Refined& base = *final_candidates[best_of_shader].from;
     nlohmann::json polish = {{"peakiness", peakiness}};
     // What is left of an evaluation budget (--budget N): the polish never overspends it.
     const long budget_left = o.budget.max_evaluations > 0 ? o.budget.max_evaluations - evaluations : o.polish_evaluations;
-    if (o.polish_evaluations > 0 && budget_left > 10 && !(stop && *stop)) {
-      std::vector<std::string> pinned;
-      const std::vector<float> packed = apply_fixed(*rf.decl, rf.packed, o.fixed, pinned);
-      polish["deterministic"] = nearly_deterministic(renderer, *rf.decl, packed, rf.seed);
-      evaluations += 2;
-      if (polish["deterministic"] || peakiness >= kPatternPeakiness) {
-        const ParameterSpace space(*rf.decl, packed, pinned);
-        Objective objective(space, target_magnitude, magnitude, renderer, rf.seed, o.coarse_resolution);
-        objective.set_budget({std::min(budget_left, o.polish_evaluations),
-                              o.budget.max_seconds > 0 ? std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6) : 0.0});
-        objective.on_progress = [&](const Objective& obj) {
-          if (stop && *stop) objective.stop();
-          state.evaluations = evaluations + obj.evaluations();
-          report("polish " + std::to_string(i + 1) + "/" + std::to_string(refined.size()));
-        };
-        RefineOptions options = o.refine;
-        options.max_evaluations = o.polish_evaluations;
-        const auto r = refine(objective, space.to_unit(packed), options);
-        evaluations += objective.evaluations();
-        // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form
-        // colour fit (colour_fit.h) then sets the free colours from the target's colour statistics.
-        const std::vector<float> polished = space.to_packed(r.unit);
-        const auto recoloured = fit_colours(*rf.decl, {polished}, {rf.seed}, pinned, colour_target, renderer, true).front();
-        evaluations += colour_fit_renders(*rf.decl, pinned, 1) + 2;
-        const auto images = renderer.render_batch(*rf.decl, {polished, recoloured.packed}, {rf.seed, rf.seed}, full);
-        polish["evaluations"] = objective.evaluations();
-        for (int k = 0; k < (recoloured.fitted ? 2 : 1); ++k) {
-          metrics::Features fp = metric.features(images[k], o.resolution);
-          const double sp = metric.similarity(target_full, fp);
-          polish[k ? "recoloured_similarity" : "similarity"] = sp;
-          if (sp > s) {
-            s = sp;
-            f = std::move(fp);
-            rf.packed = k ? recoloured.packed : polished;
-            polish["kept"] = true;
-          }
-        }
-        result.starts[i]["polished_similarity"] = s;
+    if (o.polish_evaluations <= 0 || budget_left <= 10 || (stop && *stop)) continue;
+    std::vector<std::string> pinned;
+    const std::vector<float> packed = apply_fixed(*base.decl, base.packed, o.fixed, pinned);
+    polish["deterministic"] = nearly_deterministic(renderer, *base.decl, packed, base.seed);
+    evaluations += 2;
+    if (!polish["deterministic"] && !pattern) {
+      final_candidates[best_of_shader].polish = polish;
+      continue;
+    }
+    const ParameterSpace space(*base.decl, packed, pinned);
+    Objective objective(space, target_magnitude, magnitude, renderer, base.seed, o.coarse_resolution);
+    const long polish_budget = std::max<long>(1, std::min(budget_left, o.polish_evaluations));
+    objective.set_budget({polish_budget, o.budget.max_seconds > 0
+                                             ? std::max(o.budget.max_seconds - seconds_since(t_start), 1e-6)
+                                             : 0.0});
+    objective.on_progress = [&](const Objective& obj) {
+      if (stop && *stop) objective.stop();
+      state.evaluations = evaluations + obj.evaluations();
+      report("polish " + rf.decl->name);
+    };
+    RefineOptions options = o.refine;
+    options.max_evaluations = polish_budget;
+    const auto r = polish_pattern(objective, space.to_unit(packed),
+                                  lane_end_units(space, *base.decl, lane_ends, base.packed, o.fixed), options, polish);
+    evaluations += objective.evaluations();
+    // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form
+    // colour fit (colour_fit.h) then sets the free colours from the target's colour statistics.
+    const std::vector<float> polished = space.to_packed(r.unit);
+    const auto recoloured = fit_colours(*base.decl, {polished}, {base.seed}, pinned, colour_target, renderer, true).front();
+    evaluations += colour_fit_renders(*base.decl, pinned, 1) + 2;
+    const auto images = renderer.render_batch(*base.decl, {polished, recoloured.packed}, {base.seed, base.seed}, full);
+    polish["evaluations"] = objective.evaluations();
+    double best_s = final_candidates[best_of_shader].similarity;
+    int kept = -1;
+    std::vector<metrics::Features> features;
+    for (int k = 0; k < (recoloured.fitted ? 2 : 1); ++k) {
+      features.push_back(metric.features(images[k], o.resolution));
+      const double sp = metric.similarity(target_full, features.back());
+      polish[k ? "recoloured_similarity" : "similarity"] = sp;
+      if (sp > best_s) {
+        best_s = sp;
+        kept = k;
       }
     }
-    result.starts[i]["polish"] = polish;
-    polish_seconds += seconds_since(t_polish);
+    polish["kept"] = kept >= 0;
+    // Kept only if the default similarity agrees that it is better than the shader's finalists.
+    if (kept >= 0)
+      final_candidates.push_back({&base, kept ? recoloured.packed : polished, best_s, std::move(features[kept]), polish});
+    else
+      final_candidates[best_of_shader].polish = polish;
+    result.starts[best_of_shader]["polish"] = polish;
+    if (kept >= 0) result.starts[best_of_shader]["polished_similarity"] = best_s;
+  }
+  const double polish_seconds = seconds_since(t_polish);
 
-    // A near-certain similarity wins outright (the verdict's kCertainMatch); otherwise similarity
-    // and selection decide together.
-    const bool pattern = peakiness >= kPatternPeakiness;
-    const double score = pattern && s >= kCertainMatch ? 1e6 + s : decision(s, rf.probability);
+  // A near-certain similarity wins outright (the verdict's kCertainMatch); otherwise similarity
+  // and selection decide together.
+  double best = -1e300;
+  for (auto& c : final_candidates) {
+    const double score = pattern && c.similarity >= kCertainMatch ? 1e6 + c.similarity : decision(c.similarity, c.from->probability);
     if (score > best) {
       best = score;
-      result.probability = rf.probability;
-      result.spec = spec_from_packed(*rf.decl, rf.packed, rf.seed);
-      result.similarity = s;
-      result.polish = polish;
+      result.probability = c.from->probability;
+      result.spec = spec_from_packed(*c.from->decl, c.packed, c.from->seed);
+      result.similarity = c.similarity;
+      result.polish = c.polish;
       result.per_metric.clear();
       if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
-        for (const auto& [name, value] : composite->breakdown(target_full.values, f.values)) result.per_metric[name] = value;
-      result.per_metric[metric.id()] = s;
+        for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
+      result.per_metric[metric.id()] = c.similarity;
     }
   }
   result.timings["polish"] = polish_seconds;  // included in "final"

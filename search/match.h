@@ -68,7 +68,7 @@ struct MatchOptions {
                                       // screening always completes; it is what gives a result)
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
   double selection_weight = kSelectionWeight;   // lambda of the final choice (see kSelectionWeight)
-  long polish_evaluations = 240;      // exact polish of a deterministic pattern (0: off; metrics/magnitude.h)
+  long polish_evaluations = 300;      // exact polish of a deterministic pattern (0: off; metrics/magnitude.h)
 };
 
 struct Candidate {

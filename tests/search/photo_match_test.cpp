@@ -44,7 +44,9 @@ void expect_material(const std::string& photo, const std::set<std::string>& acce
   EXPECT_TRUE(accepted.count(r.spec.shader)) << photo << " matched as " << r.spec.shader << ": " << r.to_json().dump();
   // Whatever the verdict, it is one of the three, and "good" only for the right material.
   EXPECT_TRUE(r.verdict == "good" || r.verdict == "approximate" || r.verdict == "no-match") << r.verdict;
-  if (r.verdict == "good") EXPECT_TRUE(accepted.count(r.spec.shader)) << photo;
+  if (r.verdict == "good") {
+    EXPECT_TRUE(accepted.count(r.spec.shader)) << photo;
+  }
 }
 
 TEST(PhotoMatch, BrickPhotoIsBricks) { expect_material("brick.png", {"bricks"}); }
