@@ -11,6 +11,8 @@ the library's shaders, trained on
   - the photos of the tune split, every view of each (search::target_views: the whole photo and
     closer crops), labelled with the set of shaders a person accepts for it: the loss is
     -log sum_{accepted} P(shader), so any accepted shader is right (weight --photo-weight);
+  - with `bench_select_dump --augment N`, N photo-like renders of every sample (zoom, lighting
+    gradient, blur, noise), labelled with its shader,
 with an L2 penalty (--l2). Features are standardised with the catalogue's mean and deviation.
 At match time a photo's score for a shader is the largest logit over its views plus
 alpha * log(best structural similarity of the shader's catalogue samples to the photo) - the
@@ -67,6 +69,13 @@ class Data:
         self.scale = Xs.std(axis=0) + 1e-6
         self.Z = (Xs - self.mean) / self.scale
         self.TZ = (T[:, self.use] - self.mean) / self.scale
+        # --augment rows of bench_select_dump: photo-like renders of the samples, labelled by shader.
+        aug_path = os.path.join(folder, "augmented.f32")
+        if os.path.exists(aug_path) and index.get("augmented"):
+            XA = np.fromfile(aug_path, dtype="<f4").reshape(-1, F).astype(np.float64)
+            self.Z = np.vstack([self.Z, (XA[:, self.use] - self.mean) / self.scale])
+            self.y = np.concatenate([self.y, np.array(index["augmented"])])
+            print("training rows: %d catalogue samples + %d augmented renders" % (len(X), len(XA)))
         self.photos = index["photos"]
         self.views = []
         at = 0

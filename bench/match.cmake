@@ -6,5 +6,5 @@ endif()
 # Shader selection evidence (issue 12): group distances of labelled photos to the catalogue.
 if(TARGET proctex_catalog)
   add_executable(bench_select_dump ${CMAKE_CURRENT_LIST_DIR}/select_dump.cpp)
-  target_link_libraries(bench_select_dump PRIVATE proctex_search)
+  target_link_libraries(bench_select_dump PRIVATE proctex_search proctex_shaders)
 endif()

@@ -7,10 +7,16 @@
 // DIR/targets.f32: float32, [photo][scale][feature] (the photo's composite features);
 // DIR/structural.f32: float32, [photo][shader]: the best structural similarity of the shader's
 // samples to the whole photo (what match's structural scan computes).
+// --augment N: N photo-like renders of every catalogue sample (another zoom, a lighting gradient,
+// blur, sensor noise; seeded by --augment-seed), their features in DIR/augmented.f32
+// [render][feature] and their shader indices in evidence.json "augmented": training rows for
+// what a shader looks like when photographed rather than rendered cleanly.
 // The fit of the selection weights reads these files (bench/fit_selection.py).
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
+#include <random>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -25,18 +31,52 @@
 #include "metrics/metric.h"
 #include "search/match.h"
 #include "search/selection.h"
+#include "shaders/library.h"
+#include "shaders/renderer.h"
 
 using namespace proctex;
 namespace fs = std::filesystem;
 
+namespace {
+
+// One photo-like view of a sample: zoom 0.5..2 (log-uniform) at a random origin, a linear lighting
+// gradient of up to +-35 % across the image, blur (down- and up-sampling by 0.5..1), Gaussian noise
+// of up to 3 % (linear RGB).
+Image photographed(Renderer& renderer, const ShaderDecl& decl, const catalog::Sample& sample, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  RenderSettings settings;
+  settings.extent = std::exp2(2.0f * u(rng) - 1.0f);
+  settings.origin_u = 10.0f * u(rng);
+  settings.origin_v = 10.0f * u(rng);
+  Image img = renderer.render_batch(decl, {sample.packed}, {sample.seed}, settings).front();
+  const float angle = 6.2831853f * u(rng), strength = 0.7f * u(rng);
+  const float gx = std::cos(angle) * strength, gy = std::sin(angle) * strength;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float gain = 1.0f + gx * (float(x) / img.width - 0.5f) + gy * (float(y) / img.height - 0.5f);
+      for (int c = 0; c < 3; ++c) img.pixel(x, y)[c] *= gain;
+    }
+  const int small = static_cast<int>(img.width * (0.5f + 0.5f * u(rng)));
+  if (small < img.width) img = resize(resize(img, small, small), img.width, img.height);
+  std::normal_distribution<float> noise(0.0f, 0.03f * u(rng));
+  for (float& v : img.pixels) v = std::max(0.0f, v + noise(rng));
+  return img;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   std::string db, list, out, synthetic;
+  int augment = 0;
+  unsigned augment_seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--db") db = argv[i + 1];
     else if (a == "--list") list = argv[i + 1];
     else if (a == "--out") out = argv[i + 1];
     else if (a == "--synthetic") synthetic = argv[i + 1];
+    else if (a == "--augment") augment = std::stoi(argv[i + 1]);
+    else if (a == "--augment-seed") augment_seed = static_cast<unsigned>(std::stoul(argv[i + 1]));
   }
   if (db.empty() || list.empty() || out.empty()) {
     std::fprintf(stderr, "usage: bench_select_dump --db CATALOG --list LIST.tsv --out DIR\n");
@@ -114,6 +154,23 @@ int main(int argc, char** argv) {
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
         }
+      }
+    }
+    if (augment > 0) {
+      std::ofstream aug(fs::path(out) / "augmented.f32", std::ios::binary);
+      const auto& library = ShaderLibrary::builtin();
+      Renderer renderer(library);
+      std::mt19937 rng(augment_seed);
+      index["augment_seed"] = augment_seed;
+      for (size_t s = 0; s < cats.size(); ++s) {
+        const ShaderDecl& decl = library.get(cats[s].shader);
+        for (const auto& sample : cats[s].samples)
+          for (int k = 0; k < augment; ++k) {
+            const auto f = metric.features(photographed(renderer, decl, sample, rng), 256);
+            aug.write(reinterpret_cast<const char*>(f.values.data()), f.values.size() * sizeof(float));
+            index["augmented"].push_back(s);
+          }
+        std::fprintf(stderr, "\raugmented %zu/%zu shaders", s + 1, cats.size());
       }
     }
     index["feature_size"] = metric.feature_size();
