@@ -103,13 +103,16 @@ function show(status) {
   img.onload = () => {
     results++;
     const view = $("result");
+    // At the exemplar's pixel scale when it fits (the exemplar is shown 1:1 too); a tileable
+    // result 2x2, so a seam at the wrap would show as a cross in the middle.
+    const room = r.tileable ? view.clientWidth / 2 : view.clientWidth;
+    const scale = Math.min(1, room / Math.max(r.size[0], r.size[1]));
     view.style.backgroundImage = "url('" + url + "')";
-    // A tileable result is shown 2x2, so a seam at the wrap would show in the middle.
-    view.style.backgroundSize = r.tileable ? "50% 50%" : "contain";
+    view.style.backgroundSize = Math.round(r.size[0] * scale) + "px " + Math.round(r.size[1] * scale) + "px";
     view.style.backgroundRepeat = r.tileable ? "repeat" : "no-repeat";
     view.dataset.tiled = r.tileable ? "1" : "0";
     view.dataset.results = results;
-    $("tiling-label").textContent = r.tileable ? "· tiled 2x2" : "";
+    $("tiling-label").textContent = (r.tileable ? "· tiled 2x2" : "") + (scale < 1 ? " · shown at " + Math.round(100 * scale) + "%" : " · 1:1");
     document.body.dataset.done = String(results);
   };
   img.src = url;

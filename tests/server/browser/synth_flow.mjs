@@ -70,8 +70,10 @@ try {
   // Tileable: re-run on the same upload, shown as a 2x2 tiling.
   await page.click("#tileable");
   await waitResults(page, 2);
-  check(await page.$eval("#result", e => e.dataset.tiled === "1" && e.style.backgroundSize === "50% 50%"),
-        "a tileable result is shown as a 2x2 tiling");
+  const tiling = await page.$eval("#result", e => ({ tiled: e.dataset.tiled, repeat: e.style.backgroundRepeat,
+                                                      tile: parseFloat(e.style.backgroundSize), view: e.clientWidth }));
+  check(tiling.tiled === "1" && tiling.repeat === "repeat" && Math.abs(2 * tiling.tile - tiling.view) <= 2,
+        "a tileable result is shown as a 2x2 tiling: " + JSON.stringify(tiling));
   await page.screenshot({ path: path.join(outDir, "synth-tiled.png") });
   const tiled = await imageSum(page, "#result-img");
 
