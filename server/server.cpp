@@ -191,7 +191,7 @@ struct Server::Impl {
     std::error_code ec;
     fs::create_directories(synth_cache, ec);
     ro.synth_cache = synth_cache;
-    ro.ui_renders = ui_renders;
+    if (options.ui_render_priority) ro.ui_renders = ui_renders;
     ro.on_finished = [this](const std::string&) { prune(); };
     runner = std::make_unique<JobRunner>(*store, ro);
     prune();

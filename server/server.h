@@ -26,6 +26,7 @@ struct ServerOptions {
   int max_render_size = 4096;         // per side of /api/render
   int preview_size = 128;             // live preview side
   int max_synth_size = 2048;          // per side of a synth job's output
+  bool ui_render_priority = true;     // a match pauses between batches while a UI render waits (bench: off for A/B)
   // Retention (0 = no limit): finished jobs kept, and bytes of the jobs' files plus the synth
   // analysis cache; the oldest finished jobs go first, never a queued or running one.
   int keep_jobs = 1000;
