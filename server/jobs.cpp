@@ -198,17 +198,21 @@ std::array<int, 2> parse_synth_size(const nlohmann::json& v, int max_size) {
 }  // namespace
 
 nlohmann::json SynthJobOptions::to_json() const {
+  auto decimal = [](float v) { return std::round(double(v) * 1e6) / 1e6; };
   nlohmann::json j = {{"size", {width, height}},
                       {"tileable", tileable},
                       {"seed", synth.seed},
                       {"passes", synth.passes},
-                      {"coherence", synth.kappa},
+                      {"coherence", decimal(synth.kappa)},
                       {"randomness_scale", randomness_scale},
                       {"exemplar_tiles", exemplar_tiles == synth::Tiling::Auto       ? "auto"
                                          : exemplar_tiles == synth::Tiling::Toroidal ? "yes"
                                                                                       : "no"},
                       {"downscale", downscale}};
-  if (randomness_given) j["randomness"] = synth.randomness;
+  if (randomness_given) {
+    j["randomness"] = nlohmann::json::array();
+    for (float r : synth.randomness) j["randomness"].push_back(decimal(r));
+  }
   if (!from_job.empty()) j["from_job"] = from_job;
   return j;
 }
@@ -706,12 +710,16 @@ nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
       },
       size_t(1) << 20);
 
+  // Floats as the decimals a user typed (0.2, not 0.20000000298).
+  auto decimal = [](float v) { return std::round(double(v) * 1e6) / 1e6; };
+  nlohmann::json randomness = nlohmann::json::array();
+  for (float r : options.randomness) randomness.push_back(decimal(r));
   nlohmann::json j = {{"seed", options.seed},
                       {"size", {o.width, o.height}},
                       {"tileable", o.tileable},
-                      {"randomness", options.randomness},
+                      {"randomness", randomness},
                       {"passes", options.passes},
-                      {"coherence", options.kappa},
+                      {"coherence", decimal(options.kappa)},
                       {"levels", analysis.levels},
                       {"first_level", synth::first_level(analysis, options)},
                       {"exemplar", {{"width", analysis.width}, {"height", analysis.height}, {"tiles", analysis.toroidal},

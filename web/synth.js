@@ -16,11 +16,11 @@ function options() {
            randomness_scale: parseFloat($("randomness").value), downscale: $("downscale").checked };
 }
 
+// Swaps the exemplar in once the new image has loaded (no blank box in between).
 function showExemplar(url) {
-  $("drop").innerHTML = "";
-  const img = document.createElement("img");
+  const img = new Image();
+  img.onload = () => { $("drop").innerHTML = ""; $("drop").appendChild(img); };
   img.src = url;
-  $("drop").appendChild(img);
 }
 
 // Uploads a new exemplar: the first job of that upload.

@@ -28,6 +28,7 @@ const imageSum = (page, sel) => page.$eval(sel, img => new Promise(resolve => {
   };
   if (img.complete && img.naturalWidth) done(); else img.onload = done;
 }));
+const settle = () => new Promise(r => setTimeout(r, 400));  // transitions, before a screenshot
 const results = page => page.evaluate(() => parseInt(document.body.dataset.done || "0"));
 const waitResults = (page, n) => page.waitForFunction(k => parseInt(document.body.dataset.done || "0") >= k, { timeout: 90000 }, n);
 
@@ -40,7 +41,7 @@ const page = await browser.newPage();
 const errors = [];
 page.on("pageerror", e => errors.push(String(e)));
 try {
-  await page.setViewport({ width: 1280, height: 720 });
+  await page.setViewport({ width: 1280, height: 900 });
   await page.goto(url.replace(/\/?$/, "/") + "synth", { waitUntil: "networkidle0" });
   check((await page.title()).includes("synth"), "the synth page loads");
 
@@ -65,6 +66,7 @@ try {
   check(bg.includes("/files/synth.png"), "the result panel shows the synthesised PNG");
   check(await page.$eval("#result-info", e => e.dataset.seed === "1"), "the seed (1) is shown");
   check(await page.$eval("#dl-png", e => e.href.includes("synth.png") && e.href.includes("download=1")), "a PNG download link");
+  await settle();
   await page.screenshot({ path: path.join(outDir, "synth-result.png") });
 
   // Tileable: re-run on the same upload, shown as a 2x2 tiling.
@@ -74,6 +76,7 @@ try {
                                                       tile: parseFloat(e.style.backgroundSize), view: e.clientWidth }));
   check(tiling.tiled === "1" && tiling.repeat === "repeat" && Math.abs(2 * tiling.tile - tiling.view) <= 2,
         "a tileable result is shown as a 2x2 tiling: " + JSON.stringify(tiling));
+  await settle();
   await page.screenshot({ path: path.join(outDir, "synth-tiled.png") });
   const tiled = await imageSum(page, "#result-img");
 
