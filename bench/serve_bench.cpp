@@ -47,14 +47,22 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
+// The server's Server-Timing of the last slider renders: "render" (device: the job's batch in
+// flight + this render) per request, for the report.
+std::vector<double> g_device_ms;
+
 std::vector<double> slider_renders(httplib::Client& c, int n, int offset) {
   std::vector<double> ms;
+  g_device_ms.clear();
   for (int i = 0; i < n; ++i) {
     const json body = {{"spec", {{"shader", "bricks"}, {"params", {{"rows", 4 + (i + offset) % 30}}}}}, {"size", 256}};
     const auto t = Clock::now();
     auto r = c.Post("/api/render", body.dump(), "application/json");
     if (!r || r->status != 200) throw std::runtime_error("render failed");
     ms.push_back(1000 * since(t));
+    const std::string timing = r->get_header_value("Server-Timing");
+    const auto at = timing.find("render;dur=");
+    g_device_ms.push_back(at == std::string::npos ? -1 : std::stod(timing.substr(at + 11)));
   }
   return ms;
 }
@@ -134,6 +142,9 @@ int main(int argc, char** argv) {
     std::thread job([&] { background = run_job(port, bytes, json::object()); });
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     auto ms = slider_renders(c, renders, offset);
+    std::fprintf(stderr, "bench_serve: busy renders (end to end / device ms):");
+    for (size_t i = 0; i < ms.size(); ++i) std::fprintf(stderr, " %.0f/%.0f", ms[i], g_device_ms[i]);
+    std::fprintf(stderr, "\n");
     job.join();
     jobs.push_back(background);
     return ms;

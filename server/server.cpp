@@ -485,6 +485,7 @@ struct Server::Impl {
     const std::string format = body.value("format", "png");
     if (format != "png" && format != "exr") throw HttpError{400, "'format' must be png or exr", ""};
     const auto t0 = Clock::now();
+    auto t_locked = t0;
     Image img;
     {
       // Counted while waiting too: a running match pauses at its next batch boundary, so this
@@ -495,10 +496,18 @@ struct Server::Impl {
         ~Pending() { --n; }
       } pending(*ui_renders);
       std::lock_guard lock(render_mutex);
+      t_locked = Clock::now();
       img = Renderer().render(spec, rs);
     }
+    const auto t_rendered = Clock::now();
     const std::string bytes = encode_png(img, store->data_dir() / "tmp", "." + format);
-    res.set_header("X-Render-Milliseconds", fmt::format("{:.1f}", 1000 * std::chrono::duration<double>(Clock::now() - t0).count()));
+    const auto ms = [](Clock::time_point a, Clock::time_point b) { return 1000 * std::chrono::duration<double>(b - a).count(); };
+    const auto t_end = Clock::now();
+    res.set_header("X-Render-Milliseconds", fmt::format("{:.1f}", ms(t0, t_end)));
+    // Where the time went (browser dev tools show it): another UI render, the device (the job's
+    // batch in flight + this render), the PNG/EXR encoding.
+    res.set_header("Server-Timing", fmt::format("lock;dur={:.1f}, render;dur={:.1f}, encode;dur={:.1f}", ms(t0, t_locked),
+                                                ms(t_locked, t_rendered), ms(t_rendered, t_end)));
     res.set_content(bytes, format == "png" ? "image/png" : "image/x-exr");
   }
 

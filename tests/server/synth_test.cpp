@@ -201,7 +201,11 @@ TEST_F(SynthJobs, CancelStopsAJobWithoutLeavingAPartialFile) {
     const std::string name = e.path().filename().string();
     EXPECT_TRUE(name == "input.png" || name == "exemplar.png") << "left behind: " << name;
   }
-  // A retry runs it again (here small enough to finish).
+  // A retry runs the cancelled queued job from its stored parameters and upload.
+  r = c.Post("/api/jobs/" + queued + "/retry");
+  ASSERT_EQ(r->status, 202) << r->body;
+  ASSERT_EQ(follow(c, queued).value("state", ""), "done");
+  EXPECT_EQ(fetch_image(c, "/api/jobs/" + queued + "/files/synth.png", dir_.path()).width, 64);
   EXPECT_EQ(c.Get("/api/health")->status, 200);
 }
 
