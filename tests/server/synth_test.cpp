@@ -274,6 +274,12 @@ TEST_F(SynthJobs, BadRequestsGet4xxJsonErrorsAndLeaveNothingBehind) {
   EXPECT_EQ(body_json(c.Get("/api/jobs"))["jobs"].size(), jobs_before) << "a refused request created a job";
   EXPECT_TRUE(fs::is_empty(dir_ / "data" / "tmp")) << "an upload was left in DATA/tmp";
   EXPECT_EQ(c.Get("/api/health")->status, 200);
+
+  // The image as the raw body, options in the query (as for match): accepted.
+  r = c.Post("/api/jobs/synth?options=%7B%22size%22%3A%2032%2C%20%22seed%22%3A%205%7D", ok, "image/png");
+  ASSERT_EQ(r->status, 202) << r->body;
+  EXPECT_EQ(body_json(r)["params"]["options"]["seed"], 5);
+  EXPECT_EQ(body_json(r)["params"]["options"]["size"], json::array({32, 32}));
 }
 
 // Sorted ids of the jobs the server lists.
