@@ -372,6 +372,10 @@ bool JobRunner::cancel(const std::string& id) {
     auto it = live_.find(id);
     if (it == live_.end()) return false;
     live = it->second;
+    {
+      std::lock_guard state_lock(live->mutex);
+      if (live->state != "queued" && live->state != "running") return false;  // finishing: nothing to cancel
+    }
     live->stop = true;
     auto q = std::find(queue_.begin(), queue_.end(), id);
     if (q != queue_.end()) {
@@ -435,6 +439,14 @@ void JobRunner::work() {
       --running_;
       live_.erase(id);
     }
+    // After the job has left live_: a cancel or status request sees it finished meanwhile.
+    if (job && options_.on_finished) {
+      try {
+        options_.on_finished(id);
+      } catch (const std::exception&) {
+        // Retention is housekeeping: it never fails a job (it runs again after the next one).
+      }
+    }
   }
 }
 
@@ -471,18 +483,9 @@ void JobRunner::run(const JobRecord& job, LiveJob& live) {
   }
   store_.set_progress(job.id, live.progress);
   store_.finish(job.id, state, result, error);
-  {
-    std::lock_guard lock(live.mutex);
-    live.state = state;
-    live.changed.notify_all();
-  }
-  if (options_.on_finished) {
-    try {
-      options_.on_finished(job.id);
-    } catch (const std::exception&) {
-      // Retention is housekeeping: it never fails a job (it runs again after the next one).
-    }
-  }
+  std::lock_guard lock(live.mutex);
+  live.state = state;
+  live.changed.notify_all();
 }
 
 void JobRunner::yield_to_ui_renders() {
