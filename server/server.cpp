@@ -487,14 +487,15 @@ struct Server::Impl {
     const auto t0 = Clock::now();
     auto t_locked = t0;
     Image img;
+    // Counted from here to the encoded image: a running match pauses at its next batch boundary,
+    // so this render waits for at most the batch in flight and then has the device and the cores
+    // (render, encoding) to itself.
+    struct Pending {
+      std::atomic<int>& n;
+      explicit Pending(std::atomic<int>& c) : n(c) { ++n; }
+      ~Pending() { --n; }
+    } pending(*ui_renders);
     {
-      // Counted while waiting too: a running match pauses at its next batch boundary, so this
-      // render waits for at most the batch in flight and then has the device to itself.
-      struct Pending {
-        std::atomic<int>& n;
-        explicit Pending(std::atomic<int>& c) : n(c) { ++n; }
-        ~Pending() { --n; }
-      } pending(*ui_renders);
       std::lock_guard lock(render_mutex);
       t_locked = Clock::now();
       img = Renderer().render(spec, rs);
