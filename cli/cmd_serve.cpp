@@ -30,11 +30,14 @@ void add_serve_command(CLI::App& app, GlobalOptions& global) {
   auto o = std::make_shared<server::ServerOptions>();
   auto db = std::make_shared<std::string>();
   auto data = std::make_shared<std::string>();
-  auto* cmd = app.add_subcommand("serve", "Run the HTTP service and web UI (match, library, morph)");
+  auto max_data_mb = std::make_shared<int64_t>(static_cast<int64_t>(o->max_data_bytes >> 20));
+  auto* cmd = app.add_subcommand("serve", "Run the HTTP service and web UI (match, library, morph, synth)");
   cmd->footer(
       "Serves the web UI at / and the JSON API at /api (described by /api/openapi.json).\n"
-      "Jobs (match, morph) are kept in DATA/jobs.sqlite with their files under DATA/jobs/; a restart\n"
+      "Jobs (match, morph, synth) are kept in DATA/jobs.sqlite with their files under DATA/jobs/; a restart\n"
       "keeps finished results and marks interrupted jobs (POST /api/jobs/ID/retry re-runs them).\n"
+      "Retention: beyond --keep-jobs finished jobs or --max-data-mb of files, the oldest finished jobs\n"
+      "are deleted (never a queued or running one; the synth analysis cache goes before any job).\n"
       "  proctex serve --db build/demo/catalog.sqlite          then open http://127.0.0.1:8080/\n"
       "  proctex serve --bind 0.0.0.0 --token SECRET           clients send 'Authorization: Bearer SECRET'\n"
       "See docs/service.md.");
@@ -47,9 +50,14 @@ void add_serve_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--token", o->token, "Bearer token every request must carry (required off loopback)");
   cmd->add_option("--max-upload", o->max_upload_bytes, "Largest request body in bytes")->capture_default_str()->check(CLI::Range(1024, 1 << 30));
   cmd->add_option("--max-render", o->max_render_size, "Largest /api/render side in pixels")->capture_default_str()->check(CLI::Range(16, 16384));
-  cmd->callback([o, db, data, &global] {
+  cmd->add_option("--max-synth", o->max_synth_size, "Largest synth job output side in pixels")->capture_default_str()->check(CLI::Range(16, 16384));
+  cmd->add_option("--keep-jobs", o->keep_jobs, "Finished jobs kept, the newest (0: all)")->capture_default_str()->check(CLI::Range(0, 100000000));
+  cmd->add_option("--max-data-mb", *max_data_mb, "Size limit of the jobs' files and caches in MiB (0: none); the oldest finished jobs go first")
+      ->capture_default_str()->check(CLI::Range(int64_t(0), int64_t(1) << 30));
+  cmd->callback([o, db, data, max_data_mb, &global] {
     o->catalog = db->empty() ? catalog::default_catalog_path() : std::filesystem::path(*db);
     o->data = data->empty() ? default_data_dir() : std::filesystem::path(*data);
+    o->max_data_bytes = static_cast<uint64_t>(*max_data_mb) << 20;
     server::Server srv(*o);
     const int port = srv.bind();
     (void)port;

@@ -43,6 +43,7 @@ echo "  every shader at its defaults:                           $here/$out/shade
 echo "  catalogue used:                                         $here/$db"
 echo "Try your own photo: $proctex match PHOTO --db $db --render out.png --size 2048 --compare cmp.png"
 echo
-echo "demo: the service and web UI (match, library, morph) with this catalogue:"
+echo "demo: the service and web UI (match, library, morph, synth) with this catalogue:"
 echo "  $proctex serve --db $db"
-echo "  then open http://127.0.0.1:8080/ and drop $photo on the page (docs/service.md)"
+echo "  then open http://127.0.0.1:8080/ and drop $photo on the page (docs/service.md);"
+echo "  on http://127.0.0.1:8080/synth drop a small exemplar (16-512 px) to synthesise more of it"

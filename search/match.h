@@ -98,7 +98,7 @@ struct MatchResult {
 };
 
 struct MatchProgress {
-  std::string stage;          // "target", "global", "refine 2/3", "final"
+  std::string stage;          // "target", "global", "screened 3/12", "screened", "race 1/4", "refine 2/3", "final"
   double best = 0.0;          // best similarity so far (coarse during refinement)
   std::string best_shader;
   TextureSpec best_spec;      // the best point so far as a spec (set with `best`; for live previews)

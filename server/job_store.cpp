@@ -1,6 +1,8 @@
 #include "server/job_store.h"
 
+#include <algorithm>
 #include <chrono>
+#include <map>
 #include <random>
 #include <regex>
 
@@ -160,6 +162,125 @@ void JobStore::finish(const std::string& id, const std::string& state, const nlo
   if (result.is_null()) st.bind_null(2);
   else st.bind(2, result.dump());
   st.bind(3, error).bind(4, unix_now()).bind(5, id).run();
+}
+
+namespace {
+
+uint64_t tree_bytes(const fs::path& dir) {
+  uint64_t n = 0;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, fs::directory_options::skip_permission_denied, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_regular_file(e2)) n += it->file_size(e2);
+  }
+  return n;
+}
+
+}  // namespace
+
+uint64_t JobStore::data_bytes(const fs::path& cache_dir) {
+  return tree_bytes(data_ / "jobs") + (cache_dir.empty() ? 0 : tree_bytes(cache_dir));
+}
+
+PruneReport JobStore::prune(const Retention& retention, const fs::path& cache_dir,
+                            const std::function<bool(const std::string&)>& busy) {
+  std::lock_guard prune_lock(prune_mutex_);
+  PruneReport report;
+  std::vector<std::string> finished;  // oldest first
+  {
+    std::lock_guard lock(mutex_);
+    auto st = db_->prepare("SELECT id, state FROM jobs ORDER BY CASE WHEN finished > 0 THEN finished ELSE created END, created");
+    while (st.step()) {
+      const std::string id = st.column_text(0), state = st.column_text(1);
+      if (state != "queued" && state != "running") finished.push_back(id);
+    }
+  }
+  // A folder without a row is left over from an interrupted prune (a job's row is always written
+  // before its folder, and ids are never reused, so checking the row now is enough).
+  auto has_row = [&](const std::string& id) {
+    std::lock_guard lock(mutex_);
+    auto st = db_->prepare("SELECT 1 FROM jobs WHERE id = ?");
+    st.bind(1, id);
+    return st.step();
+  };
+  std::error_code ec;
+  std::map<std::string, uint64_t> job_bytes;
+  uint64_t total = 0;
+  for (const auto& e : fs::directory_iterator(data_ / "jobs", ec)) {
+    const std::string id = e.path().filename().string();
+    if (!valid_id(id)) continue;  // not ours
+    if (!has_row(id)) {
+      std::error_code e2;
+      report.bytes_freed += tree_bytes(e.path());
+      fs::remove_all(e.path(), e2);
+      continue;
+    }
+    total += job_bytes[id] = tree_bytes(e.path());
+  }
+  struct CacheFile {
+    fs::path path;
+    uint64_t bytes;
+    fs::file_time_type used;
+  };
+  std::vector<CacheFile> cache;
+  if (!cache_dir.empty())
+    for (const auto& e : fs::directory_iterator(cache_dir, ec)) {
+      std::error_code e2;
+      if (!e.is_regular_file(e2)) continue;
+      cache.push_back({e.path(), e.file_size(e2), e.last_write_time(e2)});
+      total += cache.back().bytes;
+    }
+  std::sort(cache.begin(), cache.end(), [](const CacheFile& a, const CacheFile& b) { return a.used < b.used; });
+
+  // Deletes one finished job if it is still finished (checked under the connection's lock, so a
+  // retry that queued it meanwhile wins) and not busy.
+  auto remove_job = [&](const std::string& id) {
+    if (busy && busy(id)) return false;
+    {
+      std::lock_guard lock(mutex_);
+      auto st = db_->prepare("SELECT state FROM jobs WHERE id = ?");
+      st.bind(1, id);
+      if (!st.step()) return false;
+      const std::string state = st.column_text(0);
+      st.reset();
+      if (state == "queued" || state == "running") return false;
+      db_->prepare("DELETE FROM jobs WHERE id = ?").bind(1, id).run();
+    }
+    std::error_code e2;
+    fs::remove_all(data_ / "jobs" / id, e2);
+    const uint64_t b = job_bytes.count(id) ? job_bytes[id] : 0;
+    total -= std::min(total, b);
+    report.bytes_freed += b;
+    ++report.jobs_deleted;
+    return true;
+  };
+  size_t next = 0;  // the oldest finished job not yet considered
+  int left = static_cast<int>(finished.size());
+  if (retention.keep_jobs > 0) {
+    while (left > retention.keep_jobs && next < finished.size()) {
+      if (remove_job(finished[next])) --left;
+      ++next;
+    }
+  }
+  if (retention.max_bytes > 0) {
+    for (size_t i = 0; total > retention.max_bytes && i < cache.size(); ++i) {
+      std::error_code e2;
+      if (fs::remove(cache[i].path, e2)) {
+        total -= std::min(total, cache[i].bytes);
+        report.bytes_freed += cache[i].bytes;
+        ++report.cache_files_deleted;
+      }
+    }
+    // Never the most recently finished job: what a user has just made stays downloadable.
+    while (total > retention.max_bytes && next + 1 < finished.size()) {
+      if (remove_job(finished[next])) --left;
+      ++next;
+    }
+  }
+  report.bytes = total;
+  report.finished_jobs = left;
+  return report;
 }
 
 fs::path JobStore::job_dir(const std::string& id) const {

@@ -1,6 +1,8 @@
 #include "server/jobs.h"
 
 #include <chrono>
+#include <climits>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -9,7 +11,9 @@
 
 #include "catalog/store.h"
 #include "core/error.h"
+#include "kernels/runtime.h"
 #include "shaders/renderer.h"
+#include "synth/render.h"
 #include "transform/frames.h"
 #include "transform/morph.h"
 
@@ -146,6 +150,179 @@ search::MatchOptions match_options_from_json(const nlohmann::json& j) {
   return o;
 }
 
+namespace {
+
+// A job stopped by its stop flag (cancel) where no partial result is worth keeping (synth).
+struct JobStopped {};
+
+int level_count(int w, int h) {
+  int L = 0;
+  while ((1 << L) < std::max(w, h)) ++L;
+  return L;
+}
+
+std::array<int, 2> parse_synth_size(const nlohmann::json& v, int max_size) {
+  const std::string hint = fmt::format("send \"size\": 512, \"size\": \"1024x512\" or \"size\": [1024, 512] (16..{} px a side)", max_size);
+  int64_t w = 0, h = 0;
+  auto whole = [&](const nlohmann::json& x) -> int64_t {
+    if (!x.is_number_integer()) throw UsageError("'size' must be whole numbers of pixels", hint);
+    return x.get<int64_t>();
+  };
+  if (v.is_number()) {
+    w = h = whole(v);
+  } else if (v.is_array() && v.size() == 2) {
+    w = whole(v[0]);
+    h = whole(v[1]);
+  } else if (v.is_string()) {
+    const std::string t = v.get<std::string>();
+    const auto x = t.find_first_of("xX");
+    try {
+      size_t a = 0, b = 0;
+      const std::string ws = x == std::string::npos ? t : t.substr(0, x);
+      const std::string hs = x == std::string::npos ? t : t.substr(x + 1);
+      w = std::stoll(ws, &a);
+      h = std::stoll(hs, &b);
+      if (a != ws.size() || b != hs.size()) throw std::invalid_argument(t);
+    } catch (const std::exception&) {
+      throw UsageError("'size' \"" + t + "\" is not N or WxH", hint);
+    }
+  } else {
+    throw UsageError("'size' must be N, \"WxH\" or [W, H]", hint);
+  }
+  if (w < 16 || h < 16 || w > max_size || h > max_size)
+    throw UsageError(fmt::format("'size' {}x{} is outside 16..{} px a side", w, h, max_size),
+                     "larger syntheses: proctex synth EXEMPLAR -o out.png --size N (strip by strip, any size)");
+  return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+}  // namespace
+
+nlohmann::json SynthJobOptions::to_json() const {
+  auto decimal = [](float v) { return std::round(double(v) * 1e6) / 1e6; };
+  nlohmann::json j = {{"size", {width, height}},
+                      {"tileable", tileable},
+                      {"seed", synth.seed},
+                      {"passes", synth.passes},
+                      {"coherence", decimal(synth.kappa)},
+                      {"randomness_scale", randomness_scale},
+                      {"exemplar_tiles", exemplar_tiles == synth::Tiling::Auto       ? "auto"
+                                         : exemplar_tiles == synth::Tiling::Toroidal ? "yes"
+                                                                                      : "no"},
+                      {"downscale", downscale}};
+  if (randomness_given) {
+    j["randomness"] = nlohmann::json::array();
+    for (float r : synth.randomness) j["randomness"].push_back(decimal(r));
+  }
+  if (!from_job.empty()) j["from_job"] = from_job;
+  return j;
+}
+
+SynthJobOptions synth_options_from_json(const nlohmann::json& j, int max_size) {
+  if (!j.is_object()) throw UsageError("synth options must be a JSON object", "send e.g. {\"size\": 512, \"seed\": 3}");
+  static const std::vector<std::string> known = {"size",     "tileable",       "seed",     "randomness", "randomness_scale",
+                                                 "passes",   "coherence",      "exemplar_tiles", "downscale", "from_job"};
+  for (const auto& [k, v] : j.items())
+    if (std::find(known.begin(), known.end(), k) == known.end())
+      throw UsageError("unknown synth option '" + k + "'",
+                       "known: size, tileable, seed, randomness, randomness_scale, passes, coherence, exemplar_tiles, "
+                       "downscale, from_job");
+  SynthJobOptions o;
+  if (j.contains("size") && !j["size"].is_null()) {
+    const auto s = parse_synth_size(j["size"], max_size);
+    o.width = s[0];
+    o.height = s[1];
+  } else if (o.width > max_size) {
+    o.width = o.height = max_size;
+  }
+  auto flag = [&](const char* name, bool fallback) {
+    if (!j.contains(name) || j[name].is_null()) return fallback;
+    if (!j[name].is_boolean()) throw UsageError(fmt::format("'{}' must be true or false", name), "see /api/openapi.json");
+    return j[name].get<bool>();
+  };
+  o.tileable = flag("tileable", false);
+  o.downscale = flag("downscale", false);
+  o.synth.seed = static_cast<uint32_t>(field<int64_t>(j, "seed", 1, 0, 0xffffffffLL));
+  o.synth.passes = field<int>(j, "passes", 2, 0, 8);
+  o.synth.kappa = static_cast<float>(field<double>(j, "coherence", 2.0, 0.0, 100.0));
+  o.randomness_scale = field<double>(j, "randomness_scale", 1.0, 0.0, 4.0);
+  if (j.contains("randomness") && !j["randomness"].is_null()) {
+    const auto& r = j["randomness"];
+    std::vector<float> values;
+    const char* hint = "send \"randomness\": 0.5 or a list coarse to fine, [1, 1, 0.5, 0.2, 0], each in [0, 4]";
+    if (r.is_number()) values.push_back(r.get<float>());
+    else if (r.is_array() && !r.empty() && r.size() <= 32) {
+      for (const auto& x : r) {
+        if (!x.is_number()) throw UsageError("'randomness' must be numbers", hint);
+        values.push_back(x.get<float>());
+      }
+    } else {
+      throw UsageError("'randomness' must be a number or a list of 1-32 numbers", hint);
+    }
+    for (float v : values)
+      if (!(v >= 0.0f && v <= 4.0f)) throw UsageError(fmt::format("'randomness' {} is outside [0, 4]", v), hint);
+    o.synth.randomness = values;
+    o.randomness_given = true;
+  }
+  if (j.contains("exemplar_tiles") && !j["exemplar_tiles"].is_null()) {
+    const std::string t = j["exemplar_tiles"].is_string() ? j["exemplar_tiles"].get<std::string>() : "?";
+    if (t == "auto") o.exemplar_tiles = synth::Tiling::Auto;
+    else if (t == "yes") o.exemplar_tiles = synth::Tiling::Toroidal;
+    else if (t == "no") o.exemplar_tiles = synth::Tiling::Bounded;
+    else throw UsageError("'exemplar_tiles' must be \"auto\", \"yes\" or \"no\"", "auto measures the seam");
+  }
+  if (o.tileable && (o.width % 2 || o.height % 2))
+    throw UsageError(fmt::format("a tileable synthesis needs an even size, got {}x{}", o.width, o.height),
+                     "use a multiple of a large power of two, e.g. 512 or 1024");
+  if (j.contains("from_job") && !j["from_job"].is_null()) {
+    if (!j["from_job"].is_string() || !JobStore::valid_id(j["from_job"].get<std::string>()))
+      throw UsageError("'from_job' must be a job id (32 hex digits)", "list jobs with GET /api/jobs");
+    o.from_job = j["from_job"].get<std::string>();
+  }
+  return o;
+}
+
+std::array<int, 2> synth_exemplar_size(const SynthJobOptions& o, int w, int h) {
+  if (o.downscale && std::max(w, h) > synth::kMaxExemplarSide) {
+    const double f = double(synth::kMaxExemplarSide) / std::max(w, h);
+    w = std::max(1, static_cast<int>(std::lround(w * f)));
+    h = std::max(1, static_cast<int>(std::lround(h * f)));
+  }
+  if (std::max(w, h) > synth::kMaxExemplarSide)
+    throw UsageError(fmt::format("the exemplar is {}x{} pixels; the synthesizer takes {}..{} px a side", w, h,
+                                 synth::kMinExemplarSide, synth::kMaxExemplarSide),
+                     "crop a typical patch of the texture, or send \"downscale\": true to scale it down to 512 px");
+  if (std::min(w, h) < synth::kMinExemplarSide)
+    throw UsageError(fmt::format("the exemplar is {}x{} pixels; the synthesizer needs at least {} px a side", w, h,
+                                 synth::kMinExemplarSide),
+                     "send a larger example of the texture");
+  return {w, h};
+}
+
+synth::SynthOptions resolve_synth_options(const SynthJobOptions& o, int ew, int eh) {
+  synth::SynthOptions s = o.synth;
+  const int levels = level_count(ew, eh);
+  // The default profile has 5 values (coarse to fine); a 16 px exemplar has only 4 levels.
+  if (!o.randomness_given && static_cast<int>(s.randomness.size()) > levels) s.randomness.resize(std::max(1, levels));
+  if (static_cast<int>(s.randomness.size()) > levels)
+    throw UsageError(fmt::format("'randomness' has {} values but a {}x{} exemplar has {} levels", s.randomness.size(), ew, eh, levels),
+                     "give one value, or at most one per level, coarse to fine");
+  for (float& r : s.randomness) {
+    r = static_cast<float>(r * o.randomness_scale);
+    if (!(r <= 4.0f))
+      throw UsageError(fmt::format("'randomness' x 'randomness_scale' is {}, over 4", r), "use a smaller randomness_scale");
+  }
+  if (o.tileable) {
+    s.period_x = o.width;
+    s.period_y = o.height;
+  }
+  synth::Analysis shape;  // check_options reads only the exemplar's size and levels
+  shape.width = ew;
+  shape.height = eh;
+  shape.levels = levels;
+  synth::check_options(shape, s);
+  return s;
+}
+
 std::string encode_png(const Image& image, const fs::path& tmp_dir, const std::string& ext) {
   const fs::path path = tmp_dir / tmp_name(ext);
   save_image(image, path);
@@ -195,6 +372,10 @@ bool JobRunner::cancel(const std::string& id) {
     auto it = live_.find(id);
     if (it == live_.end()) return false;
     live = it->second;
+    {
+      std::lock_guard state_lock(live->mutex);
+      if (live->state != "queued" && live->state != "running") return false;  // finishing: nothing to cancel
+    }
     live->stop = true;
     auto q = std::find(queue_.begin(), queue_.end(), id);
     if (q != queue_.end()) {
@@ -258,6 +439,14 @@ void JobRunner::work() {
       --running_;
       live_.erase(id);
     }
+    // After the job has left live_: a cancel or status request sees it finished meanwhile.
+    if (job && options_.on_finished) {
+      try {
+        options_.on_finished(id);
+      } catch (const std::exception&) {
+        // Retention is housekeeping: it never fails a job (it runs again after the next one).
+      }
+    }
   }
 }
 
@@ -265,8 +454,13 @@ void JobRunner::run(const JobRecord& job, LiveJob& live) {
   std::string state, error;
   nlohmann::json result;
   try {
-    result = job.kind == "match" ? run_match(job, live) : run_morph(job, live);
+    result = job.kind == "match"   ? run_match(job, live)
+             : job.kind == "synth" ? run_synth(job, live)
+                                   : run_morph(job, live);
     state = live.stop ? "cancelled" : "done";
+  } catch (const JobStopped&) {
+    state = "cancelled";
+    result = nullptr;
   } catch (const Error& e) {
     state = "failed";
     error = e.message() + (e.hint().empty() ? "" : " (" + e.hint() + ")");
@@ -292,6 +486,14 @@ void JobRunner::run(const JobRecord& job, LiveJob& live) {
   std::lock_guard lock(live.mutex);
   live.state = state;
   live.changed.notify_all();
+}
+
+void JobRunner::yield_to_ui_renders() {
+  if (!options_.ui_renders) return;
+  // Bounded: a stream of renders from many clients cannot stop a match for more than 2 s at a time.
+  const auto deadline = Clock::now() + std::chrono::seconds(2);
+  while (options_.ui_renders->load() > 0 && Clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
 }
 
 nlohmann::json JobRunner::run_match(const JobRecord& job, LiveJob& live) {
@@ -356,6 +558,8 @@ nlohmann::json JobRunner::run_match(const JobRecord& job, LiveJob& live) {
   auto result = search::match(target, store, options, [&](const search::MatchProgress& p) {
     last = p;
     publish(p, false);
+    // Between batches: let a waiting slider render have the device and the cores.
+    yield_to_ui_renders();
   }, &live.stop);
 
   nlohmann::json j = result.to_json();
@@ -448,6 +652,97 @@ nlohmann::json JobRunner::run_morph(const JobRecord& job, LiveJob& live) {
   j["files"] = files;
   j["size"] = size;
   j["fps"] = fps;
+  publish("done", 1.0);
+  return j;
+}
+
+}  // namespace proctex::server
+
+namespace proctex::server {
+
+nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
+  const fs::path dir = store_.job_dir(job.id);
+  const auto& p = job.params;
+  const SynthJobOptions o = synth_options_from_json(p.at("options"), p.value("max_size", INT_MAX));
+  const auto t0 = Clock::now();
+  auto publish = [&](const std::string& stage, double fraction) {
+    {
+      std::lock_guard lock(live.mutex);
+      live.progress = {{"stage", stage}, {"fraction", fraction}, {"elapsed", since(t0)}};
+    }
+    live.changed.notify_all();
+  };
+  publish("exemplar", 0.0);
+  ImageLimits limits;
+  limits.max_dimension = p.value("max_dimension", 8192);
+  limits.max_pixels = p.value("max_pixels", int64_t(1) << 24);
+  Image image = load_image(dir / p.at("input").get<std::string>(), limits);
+  const int uploaded_w = image.width, uploaded_h = image.height;
+  const auto size = synth_exemplar_size(o, image.width, image.height);
+  if (size[0] != image.width || size[1] != image.height) image = resize(image, size[0], size[1]);
+  synth::Exemplar ex;
+  ex.name = "exemplar";
+  ex.colour = std::move(image);
+  synth::validate(ex);
+  save_image(ex.colour, dir / "exemplar.png");
+  const synth::SynthOptions options = resolve_synth_options(o, ex.width(), ex.height());
+  if (live.stop) throw JobStopped{};
+
+  publish("analysis", 0.0);
+  synth::AnalysisOptions ao;
+  ao.tiling = o.exemplar_tiles;
+  const synth::Analysis analysis = synth::analyse_cached(ex, ao, options_.synth_cache);
+  if (!options_.synth_cache.empty()) {  // last use = modification time: retention drops the least recently used first
+    std::error_code ec;
+    fs::last_write_time(options_.synth_cache / (analysis.hash + ".bin"), fs::file_time_type::clock::now(), ec);
+  }
+  if (live.stop) throw JobStopped{};
+
+  publish("synthesis", 0.0);
+  synth::Synthesizer synthesizer(analysis);
+  synth::RenderOutputs outputs;
+  outputs.colour = dir / "synth.png";
+  const synth::Window window{0, 0, o.width, o.height};
+  // Strips of at most 1 M pixels: progress and a cancel between strips; the output does not depend
+  // on the strips (spatial determinism).
+  const synth::RenderStats stats = synth::render(
+      synthesizer, ex, window, options, outputs,
+      [&](double f) {
+        publish("synthesis", f);
+        if (live.stop) throw JobStopped{};  // the unfinished file is removed by synth::render
+      },
+      size_t(1) << 20);
+
+  // Floats as the decimals a user typed (0.2, not 0.20000000298).
+  auto decimal = [](float v) { return std::round(double(v) * 1e6) / 1e6; };
+  nlohmann::json randomness = nlohmann::json::array();
+  for (float r : options.randomness) randomness.push_back(decimal(r));
+  nlohmann::json j = {{"seed", options.seed},
+                      {"size", {o.width, o.height}},
+                      {"tileable", o.tileable},
+                      {"randomness", randomness},
+                      {"passes", options.passes},
+                      {"coherence", decimal(options.kappa)},
+                      {"levels", analysis.levels},
+                      {"first_level", synth::first_level(analysis, options)},
+                      {"exemplar", {{"width", analysis.width}, {"height", analysis.height}, {"tiles", analysis.toroidal},
+                                    {"uploaded", {uploaded_w, uploaded_h}},
+                                    {"downscaled", uploaded_w != analysis.width || uploaded_h != analysis.height}}},
+                      {"analysis_hash", analysis.hash},
+                      {"analysis_cached", analysis.from_cache},
+                      {"timings", {{"analysis", analysis.seconds}, {"synthesis", stats.seconds}, {"total", since(t0)}}},
+                      {"strips", stats.strips},
+                      {"device", ocl::Runtime::instance().device().name},
+                      {"command", fmt::format("proctex synth exemplar.png -o synth.png --size {}x{} --seed {}{} --passes {} "
+                                              "--coherence {} --randomness {}{}",
+                                              o.width, o.height, options.seed, o.tileable ? " --tileable" : "",
+                                              options.passes, options.kappa, fmt::join(options.randomness, ","),
+                                              o.exemplar_tiles == synth::Tiling::Auto       ? ""
+                                              : o.exemplar_tiles == synth::Tiling::Toroidal ? " --exemplar-tiles yes"
+                                                                                             : " --exemplar-tiles no")},
+                      {"files", {{"synth", "synth.png"}, {"exemplar", "exemplar.png"}, {"input", p.at("input")},
+                                 {"result", "result.json"}}}};
+  write_file_atomic(dir / "result.json", j.dump(2) + "\n");
   publish("done", 1.0);
   return j;
 }

@@ -24,6 +24,7 @@
 #include "shaders/library.h"
 #include "shaders/renderer.h"
 #include "shaders/spec.h"
+#include "synth/exemplar.h"
 
 namespace proctex::embedded {
 const std::vector<std::pair<std::string, std::string>>& web_files();
@@ -167,7 +168,13 @@ struct Server::Impl {
   int port = 0;
   socket_t listen_socket = -1;
   std::mutex render_mutex;  // UI renders one at a time (bounded memory), between the job's launches
+  // UI renders waiting or running: a match job pauses between its batches while it is non-zero.
+  std::shared_ptr<std::atomic<int>> ui_renders = std::make_shared<std::atomic<int>>(0);
   std::map<std::string, const std::string*> assets;
+  fs::path synth_cache;
+  std::mutex retention_mutex;
+  PruneReport last_prune;
+  int jobs_pruned = 0;
 
   explicit Impl(ServerOptions o) : options(std::move(o)) {
     if (!is_loopback(options.bind) && options.token.empty())
@@ -180,9 +187,31 @@ struct Server::Impl {
     ro.workers = options.workers;
     ro.queue_limit = options.queue_limit;
     ro.preview_size = options.preview_size;
+    synth_cache = options.data / "cache" / "synth";
+    std::error_code ec;
+    fs::create_directories(synth_cache, ec);
+    ro.synth_cache = synth_cache;
+    if (options.ui_render_priority) ro.ui_renders = ui_renders;
+    ro.on_finished = [this](const std::string&) { prune(); };
     runner = std::make_unique<JobRunner>(*store, ro);
+    prune();
     for (const auto& [path, content] : embedded::web_files()) assets[path] = &content;
     routes();
+  }
+  // The workers stop first: a job finishing now still prunes with the members below intact.
+  ~Impl() { runner.reset(); }
+
+  // The retention policy, after every finished job and at start-up.
+  void prune() {
+    Retention r;
+    r.keep_jobs = options.keep_jobs;
+    r.max_bytes = options.max_data_bytes;
+    const PruneReport report = store->prune(r, synth_cache, [this](const std::string& id) {
+      return runner && runner->live(id) != nullptr;
+    });
+    std::lock_guard lock(retention_mutex);
+    last_prune = report;
+    jobs_pruned += report.jobs_deleted;
   }
 
   ImageLimits upload_limits() const {
@@ -194,7 +223,7 @@ struct Server::Impl {
 
   // Checks an uploaded image (format by content, dimensions before decoding, a full decode for
   // truncated files) in the data folder's tmp/ under a server-chosen name; returns that path.
-  fs::path accept_image(const std::string& bytes, const std::string& what, Image* decoded = nullptr) {
+  fs::path accept_image(const std::string& bytes, const std::string& what, Image* decoded = nullptr, int min_side = 32) {
     if (bytes.empty()) throw HttpError{400, what + " is empty", "send a PNG, JPEG, TIFF or EXR file"};
     const std::string ext = sniff_image(bytes);
     if (ext.empty()) throw HttpError{415, what + " is not a PNG, JPEG, TIFF or EXR image", "send an image file"};
@@ -215,7 +244,7 @@ struct Server::Impl {
         if (const size_t at = reason.find("': "); at != std::string::npos) reason = reason.substr(at + 3);
         throw HttpError{400, what + " cannot be read: " + reason, e.hint()};
       }
-      if (std::min(img.width, img.height) < 32)
+      if (std::min(img.width, img.height) < min_side)
         throw HttpError{400, fmt::format("{} is {}x{} pixels; a texture needs at least 32 on each side", what, img.width, img.height),
                         "send a larger image"};
       if (decoded) *decoded = std::move(img);
@@ -297,6 +326,7 @@ struct Server::Impl {
     s.Get("/", page("index.html"));
     s.Get("/library", page("library.html"));
     s.Get("/morph", page("morph.html"));
+    s.Get("/synth", page("synth.html"));
     s.Get(R"(/static/([a-z0-9_\-]+\.(?:js|css|html)))", [this](const httplib::Request& req, httplib::Response& res) {
       auto it = assets.find("web/" + req.matches[1].str());
       if (it == assets.end()) return send_error(res, 404, "no such file", "");
@@ -314,7 +344,10 @@ struct Server::Impl {
                         {"limits", {{"max_upload_bytes", options.max_upload_bytes},
                                     {"max_upload_dimension", options.max_upload_dimension},
                                     {"max_upload_pixels", options.max_upload_pixels},
-                                    {"max_render_size", options.max_render_size}}}});
+                                    {"max_render_size", options.max_render_size},
+                                    {"max_synth_size", options.max_synth_size},
+                                    {"synth_exemplar_side", {synth::kMinExemplarSide, synth::kMaxExemplarSide}}}},
+                        {"retention", retention_json()}});
       });
     });
 
@@ -352,6 +385,9 @@ struct Server::Impl {
     });
     s.Post("/api/jobs/morph", [this](const httplib::Request& req, httplib::Response& res) {
       guarded(res, [&] { create_morph(req, res); });
+    });
+    s.Post("/api/jobs/synth", [this](const httplib::Request& req, httplib::Response& res) {
+      guarded(res, [&] { create_synth(req, res); });
     });
     s.Get("/api/jobs", [this](const httplib::Request& req, httplib::Response& res) {
       guarded(res, [&] {
@@ -449,13 +485,30 @@ struct Server::Impl {
     const std::string format = body.value("format", "png");
     if (format != "png" && format != "exr") throw HttpError{400, "'format' must be png or exr", ""};
     const auto t0 = Clock::now();
+    auto t_locked = t0;
     Image img;
+    // Counted from here to the encoded image: a running match pauses at its next batch boundary,
+    // so this render waits for at most the batch in flight and then has the device and the cores
+    // (render, encoding) to itself.
+    struct Pending {
+      std::atomic<int>& n;
+      explicit Pending(std::atomic<int>& c) : n(c) { ++n; }
+      ~Pending() { --n; }
+    } pending(*ui_renders);
     {
       std::lock_guard lock(render_mutex);
+      t_locked = Clock::now();
       img = Renderer().render(spec, rs);
     }
+    const auto t_rendered = Clock::now();
     const std::string bytes = encode_png(img, store->data_dir() / "tmp", "." + format);
-    res.set_header("X-Render-Milliseconds", fmt::format("{:.1f}", 1000 * std::chrono::duration<double>(Clock::now() - t0).count()));
+    const auto ms = [](Clock::time_point a, Clock::time_point b) { return 1000 * std::chrono::duration<double>(b - a).count(); };
+    const auto t_end = Clock::now();
+    res.set_header("X-Render-Milliseconds", fmt::format("{:.1f}", ms(t0, t_end)));
+    // Where the time went (browser dev tools show it): another UI render, the device (the job's
+    // batch in flight + this render), the PNG/EXR encoding.
+    res.set_header("Server-Timing", fmt::format("lock;dur={:.1f}, render;dur={:.1f}, encode;dur={:.1f}", ms(t0, t_locked),
+                                                ms(t_locked, t_rendered), ms(t_rendered, t_end)));
     res.set_content(bytes, format == "png" ? "image/png" : "image/x-exr");
   }
 
@@ -551,6 +604,86 @@ struct Server::Impl {
     if (!runner->has_room()) throw QueueFull("the job queue is full");
     const JobRecord job = store->create("morph", params);
     runner->enqueue(job.id);
+    res.set_header("Location", "/api/jobs/" + job.id);
+    send_json(res, job_status(job_or_404(job.id)), 202);
+  }
+
+  json retention_json() {
+    std::lock_guard lock(retention_mutex);
+    return {{"keep_jobs", options.keep_jobs}, {"max_data_bytes", options.max_data_bytes},
+            {"data_bytes", last_prune.bytes}, {"finished_jobs", last_prune.finished_jobs},
+            {"jobs_pruned", jobs_pruned}};
+  }
+
+  // POST /api/jobs/synth: multipart `exemplar` (+ `options` JSON), or a JSON body of options with
+  // "from_job" (reuse an earlier job's uploaded image), or the image as the body (?options=).
+  void create_synth(const httplib::Request& req, httplib::Response& res) {
+    json opts = json::object();
+    const std::string* upload = nullptr;
+    auto parse_options = [](const std::string& text) {
+      json j = json::parse(text, nullptr, false);
+      if (j.is_discarded()) throw HttpError{400, "'options' is not valid JSON", "send -F 'options={\"size\": 512}'"};
+      return j;
+    };
+    if (req.is_multipart_form_data()) {
+      upload = upload_field(req, "exemplar");
+      if (req.has_file("options")) opts = parse_options(req.get_file_value("options").content);
+      if (!upload && !opts.contains("from_job"))
+        throw HttpError{400, "no 'exemplar' field in the form", "curl -F exemplar=@rocks.png -F 'options={\"size\": 512}'"};
+    } else if (!sniff_image(req.body).empty()) {
+      upload = &req.body;  // the image as the body
+      if (req.has_param("options")) opts = parse_options(req.get_param_value("options"));
+    } else {
+      opts = parse_body(req);  // JSON options naming an earlier job's upload
+      if (!opts.contains("from_job"))
+        throw HttpError{400, "no exemplar: upload one (form field 'exemplar') or name an earlier job's with \"from_job\"",
+                        "curl -F exemplar=@rocks.png $URL/api/jobs/synth, or -d '{\"from_job\": \"ID\"}'"};
+    }
+    const SynthJobOptions so = synth_options_from_json(opts, options.max_synth_size);
+    if (upload && !so.from_job.empty())
+      throw HttpError{400, "both an uploaded exemplar and \"from_job\"", "send one of them"};
+    if (!runner->has_room()) throw QueueFull("the job queue is full");
+    fs::path tmp;
+    Image image;
+    size_t bytes = 0;
+    if (upload) {
+      tmp = accept_image(*upload, "the exemplar", &image, 1);
+      bytes = upload->size();
+    } else {
+      const JobRecord src = job_or_404(so.from_job);
+      const std::string input = src.params.value("input", "");
+      std::error_code ec;
+      const fs::path from = store->job_dir(src.id) / input;
+      if (input.empty() || !fs::is_regular_file(from, ec))
+        throw HttpError{400, "job " + src.id + " has no uploaded image", "name a match or synth job (\"from_job\")"};
+      tmp = accept_image(read_file(from), "job " + src.id + "'s image", &image, 1);
+      bytes = fs::file_size(tmp, ec);
+    }
+    try {
+      const auto size = synth_exemplar_size(so, image.width, image.height);
+      resolve_synth_options(so, size[0], size[1]);  // randomness per level, period: as the job will
+    } catch (...) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw;
+    }
+    json params = {{"options", so.to_json()}, {"input", "input" + tmp.extension().string()}, {"upload_bytes", bytes},
+                   {"max_dimension", options.max_upload_dimension}, {"max_pixels", options.max_upload_pixels},
+                   {"max_size", options.max_synth_size}};
+    const JobRecord job = store->create("synth", params);
+    std::error_code ec;
+    fs::rename(tmp, store->job_dir(job.id) / ("input" + tmp.extension().string()), ec);
+    if (ec) {
+      fs::remove(tmp, ec);
+      store->finish(job.id, "failed", nullptr, "could not store the upload");
+      throw Error("cannot store the upload: " + ec.message(), "check the --data folder");
+    }
+    try {
+      runner->enqueue(job.id);
+    } catch (const QueueFull&) {
+      store->finish(job.id, "failed", nullptr, "queue full");
+      throw;
+    }
     res.set_header("Location", "/api/jobs/" + job.id);
     send_json(res, job_status(job_or_404(job.id)), 202);
   }

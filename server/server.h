@@ -1,7 +1,7 @@
 #pragma once
 // proctex serve: the HTTP service. Thin handlers parse a request, call the same library function
-// the CLI calls (shaders/ render, metrics/ compare, search::match and transform/ morph as jobs,
-// catalog::info) and map proctex::Error to a JSON error body. The job store (job_store.h) is the
+// the CLI calls (shaders/ render, metrics/ compare, search::match, transform/ morph and synth/
+// synthesis as jobs, catalog::info) and map proctex::Error to a JSON error body. The job store (job_store.h) is the
 // only state; the web UI (web/) is embedded and served from "/". API: server/openapi.json,
 // served at /api/openapi.json; docs/service.md.
 #include <cstdint>
@@ -25,6 +25,12 @@ struct ServerOptions {
   int64_t max_upload_pixels = int64_t(1) << 24;  // 16.7 M pixels (192 MB as float RGB)
   int max_render_size = 4096;         // per side of /api/render
   int preview_size = 128;             // live preview side
+  int max_synth_size = 2048;          // per side of a synth job's output
+  bool ui_render_priority = true;     // a match pauses between batches while a UI render waits (bench: off for A/B)
+  // Retention (0 = no limit): finished jobs kept, and bytes of the jobs' files plus the synth
+  // analysis cache; the oldest finished jobs go first, never a queued or running one.
+  int keep_jobs = 1000;
+  uint64_t max_data_bytes = uint64_t(4096) << 20;
 };
 
 // True for 127.0.0.0/8, ::1 and "localhost".

@@ -25,7 +25,7 @@ const apiJson = async (path, options) => (await api(path, options)).json();
 function showError(el, e) { el.textContent = e ? String(e.message || e) : ""; }
 
 function nav(active) {
-  const links = [["/", "Match"], ["/library", "Library"], ["/morph", "Morph"]];
+  const links = [["/", "Match"], ["/library", "Library"], ["/morph", "Morph"], ["/synth", "Synth"]];
   const header = document.createElement("header");
   header.innerHTML = '<h1>proctex</h1><nav></nav><span class="status" id="health"></span>';
   for (const [href, name] of links) {

@@ -72,6 +72,7 @@ async function finished(status) {
   $("dl-compare").href = withToken(files + r.files.compare);
   $("dl-result").href = withToken(files + r.files.result);
   $("to-morph").href = withToken("/morph?job=" + status.id);
+  $("to-synth").href = withToken("/synth?job=" + status.id);
   $("shader-name").textContent = spec.shader;
   $("seed").value = spec.seed;
   const decl = await shaderDecl(spec.shader);

@@ -150,10 +150,10 @@ TEST_F(Api, DescribesItselfAndServesTheWebUi) {
   const json api = body_json(r);
   ASSERT_TRUE(api.is_object());
   EXPECT_EQ(api["openapi"].get<std::string>().substr(0, 2), "3.");
-  for (const char* path : {"/api/shaders", "/api/render", "/api/compare", "/api/catalog", "/api/jobs/match", "/api/jobs/morph",
+  for (const char* path : {"/api/shaders", "/api/render", "/api/compare", "/api/catalog", "/api/jobs/match", "/api/jobs/morph", "/api/jobs/synth",
                            "/api/jobs/{id}", "/api/jobs/{id}/result", "/api/jobs/{id}/cancel", "/api/jobs/{id}/events"})
     EXPECT_TRUE(api["paths"].contains(path)) << path;
-  for (const char* page : {"/", "/library", "/morph", "/static/app.js", "/static/app.css"}) {
+  for (const char* page : {"/", "/library", "/morph", "/synth", "/static/synth.js", "/static/app.js", "/static/app.css"}) {
     r = c.Get(page);
     ASSERT_TRUE(r);
     EXPECT_EQ(r->status, 200) << page;
