@@ -135,7 +135,10 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
   const LevelSchedule schedule = level_schedule(graph.graph, graph_levels(graph), o.zoom);  // zoom check first
   (void)schedule;
   Progress analysing("analysing the graph", 1, global.quiet || o.json);
-  const GraphAnalysis analysis = analyse_graph(graph);
+  const std::filesystem::path cache = o.no_cache ? std::filesystem::path()
+                                      : !o.cache_dir.empty() ? std::filesystem::path(o.cache_dir)
+                                                             : default_cache_dir();
+  const GraphAnalysis analysis = analyse_graph_cached(graph, cache);
   analysing.finish();
   GraphSynthesizer synth(graph, analysis);
   Progress progress("synthesising", 100, global.quiet || o.json);
@@ -182,6 +185,7 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"coherence", options.kappa},
                 {"coords", o.coords},
                 {"analysis_hash", analysis.hash},
+                {"analysis_cached", analysis.from_cache},
                 {"analysis_seconds", analysis.seconds},
                 {"synthesis_seconds", stats.seconds},
                 {"strips", stats.strips},
@@ -192,7 +196,7 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
                 o.output.c_str(), window.width, window.height, static_cast<long long>(window.x),
                 static_cast<long long>(window.y), o.zoom, graph.images.size(), o.graph.c_str(), analysis.width,
                 analysis.height, options.seed, format_seconds(stats.seconds).c_str(),
-                format_seconds(analysis.seconds).c_str());
+                analysis.from_cache ? "cached" : format_seconds(analysis.seconds).c_str());
   }
 }
 

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <unistd.h>
 #include <mutex>
 #include <thread>
 
@@ -164,7 +166,7 @@ std::vector<int32_t> patch_match(int w, int h, bool dst_toroidal, int step, int 
     const int64_t d = dist(i, c);
     if (d < best[i] || (d == best[i] && static_cast<int32_t>(c) < nn[i])) best[i] = d, nn[i] = static_cast<int32_t>(c);
   };
-  for (int it = 0; it < 4; ++it) {
+  for (int it = 0; it < 3; ++it) {
     const bool fwd = it % 2 == 0;
     const int dir = fwd ? 1 : -1;
     for (size_t k = 0; k < n; ++k) {
@@ -242,18 +244,14 @@ kernel void gy_upsample(global const int4* pS, global const int4* pR, int pw, lo
   R[(long)j * w + i] = (int4)(r.x, r.y, r.z, 0);
 }
 
-// The appearance change (8 values) of a constant colour offset d.
-void gy_offset_app(constant int* AR, int4 d, int* out) {
-  for (int k = 0; k < 8; ++k)
-    out[k] = (int)(((long)AR[k * 3] * d.x + (long)AR[k * 3 + 1] * d.y + (long)AR[k * 3 + 2] * d.z) >> 16);
-}
-
 // One correction sub-pass over the pixels of parity (parx, pary) of the absolute coordinates.
+// GT[t][k][c]: projected-feature change (shift 24) of a colour offset on tap t; GS = sum over taps.
 kernel void gy_correct(global int4* S, global int4* R, int w, int h, long ox, long oy, int parx, int pary,
                        global const char* A, global const short* F, global const int* C,
                        global const int* LN, global const int* LT, global const short4* LO, int M,
-                       constant int* P, constant int* AR, constant int* PS,
-                       global const uchar* valid, global const uchar* tor, int L, int ew, int eh, int kappa) {
+                       constant int* P, constant long* GT, constant long* GS,
+                       global const uchar* valid, global const uchar* adm, int nodes, global const uchar* tor, int L,
+                       int ew, int eh, int kappa) {
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
@@ -264,32 +262,44 @@ kernel void gy_correct(global int4* S, global int4* R, int w, int h, long ox, lo
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
   const int4 me = S[(long)j * w + i];
   const int4 Rp = R[(long)j * w + i];
-  // The synthesised neighbourhood seen in this pixel's colour frame: neighbour appearance shifted by
-  // the difference of the colour offsets (Han eq. 5.5), projected like the exemplar's.
+  // The synthesised neighbourhood seen in this pixel's colour frame (Han eq. 5.5): each tap's
+  // appearance plus the change of its colour offset relative to this pixel's, projected.
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  long off[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   for (int t = 0; t < 5; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int4 c = S[(long)nj * w + ni];
-    const int4 rc = R[(long)nj * w + ni];
-    int da[8];
-    gy_offset_app(AR, rc - Rp, da);
+    const int4 d = R[(long)nj * w + ni] - Rp;
     global const char* a = A + 8 * ((long)c.z * n + (long)c.y * ew + c.x);
-    for (int d = 0; d < 8; ++d) {
-      const int v = a[d] + da[d];
-      constant int* row = P + (t * 8 + d) * 8;
+    for (int e = 0; e < 8; ++e) {
+      const int v = a[e];
+      constant int* row = P + (t * 8 + e) * 8;
       for (int k = 0; k < 8; ++k) proj[k] += v * row[k];
     }
+    if (d.x | d.y | d.z) {
+      constant long* g = GT + t * 24;
+      for (int k = 0; k < 8; ++k) off[k] += g[k * 3] * d.x + g[k * 3 + 1] * d.y + g[k * 3 + 2] * d.z;
+    }
   }
-  for (int k = 0; k < 8; ++k) proj[k] >>= 8;
+  for (int k = 0; k < 8; ++k) proj[k] = (proj[k] >> 8) + (int)(off[k] >> 24);
 
   int4 best = me, bestR = Rp;
   int bestd = 0x7fffffff;
+  // A pixel on a valid stack level keeps to it (or to one linked at the same scale, adm = 2); one that
+  // must leave it (its finest level before the output level) takes any admissible level (adm >= 1).
   const int free_choice = valid[me.z];
+  global const uchar* my_adm = adm + (long)me.z * nodes;
+  const int need = free_choice ? 2 : 1;
   for (int q = 0; q < 9; ++q) {
     const int dx = odx[q], dy = ody[q];
     const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
     const int4 c = S[(long)nj * w + ni];
     const int4 rq = R[(long)nj * w + ni];
+    // Candidates from this neighbour live in its colour frame: the target shifts by its offset.
+    int target[8];
+    const int4 d = rq - Rp;
+    for (int k = 0; k < 8; ++k)
+      target[k] = proj[k] - (int)((GS[k * 3] * d.x + GS[k * 3 + 1] * d.y + GS[k * 3 + 2] * d.z) >> 24);
     const long texel = (long)c.y * ew + c.x;
     for (int kk = 0; kk < 2 + M; ++kk) {
       int cn, idx;
@@ -305,7 +315,7 @@ kernel void gy_correct(global int4* S, global int4* R, int w, int h, long ox, lo
         const short4 o = LO[slot * n + texel];
         b = (int4)(o.x, o.y, o.z, 0);
       }
-      if (!valid[cn]) continue;
+      if (!valid[cn] || my_adm[cn] < need) continue;
       const int cl = cn % (L + 1), ce = cn / (L + 1);
       const int sp = 1 << (L - cl);
       int ux = idx % ew - dx * sp, uy = idx / ew - dy * sp;
@@ -319,23 +329,19 @@ kernel void gy_correct(global int4* S, global int4* R, int w, int h, long ox, lo
         ux = gy_wrap(ux, ew);
         uy = gy_wrap(uy, eh);
       }
-      // The candidate's colour frame: the neighbour's offset plus the link's.
-      const int4 rc = rq + b;
-      int df[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-      if (rc.x != Rp.x || rc.y != Rp.y || rc.z != Rp.z) {
-        int da[8];
-        gy_offset_app(AR, rc - Rp, da);
-        for (int k = 0; k < 8; ++k) {
-          int acc = 0;
-          for (int d = 0; d < 8; ++d) acc += da[d] * PS[d * 8 + k];
-          df[k] = acc >> 8;
-        }
-      }
+      // The candidate's features, shifted by the link's colour offset (0 inside one exemplar).
       global const short* f = F + 8 * ((long)cn * n + (long)uy * ew + ux);
       int dist = 0;
-      for (int k = 0; k < 8; ++k) { const int e = proj[k] - (f[k] + df[k]); dist += e * e; }
+      if (b.x | b.y | b.z) {
+        for (int k = 0; k < 8; ++k) {
+          const int e = target[k] - f[k] - (int)((GS[k * 3] * b.x + GS[k * 3 + 1] * b.y + GS[k * 3 + 2] * b.z) >> 24);
+          dist += e * e;
+        }
+      } else {
+        for (int k = 0; k < 8; ++k) { const int e = target[k] - f[k]; dist += e * e; }
+      }
       if (kk >= 1) dist += (dist >> 8) * kappa;  // favour growing patches (LH05's kappa)
-      if (dist < bestd) { bestd = dist; best = (int4)(ux, uy, cn, 0); bestR = (int4)(rc.x, rc.y, rc.z, 0); }
+      if (dist < bestd) { bestd = dist; best = (int4)(ux, uy, cn, 0); bestR = (int4)(rq.x + b.x, rq.y + b.y, rq.z + b.z, 0); }
     }
   }
   S[(long)j * w + i] = best;
@@ -364,6 +370,116 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 }
 
 }  // namespace
+
+namespace {
+
+constexpr uint32_t kGraphCacheVersion = 1;
+constexpr uint32_t kGraphMagic = 0x47525048;  // "GRPH"
+
+std::string graph_hash(const LoadedGraph& lg) {
+  std::string key = fmt::format("proctex-graph v{} {}x{} e{}|", kGraphCacheVersion, lg.images[0].width,
+                                lg.images[0].height, lg.images.size());
+  for (const auto& e : lg.graph.edges) key += fmt::format("{},{},{};", e.from, e.to, e.r);
+  for (size_t i = 0; i < lg.images.size(); ++i) {
+    key += fmt::format("t{}|", int(lg.toroidal[i]));
+    key.append(reinterpret_cast<const char*>(lg.images[i].pixels.data()), lg.images[i].pixels.size() * sizeof(float));
+  }
+  return fnv1a_hex(key);
+}
+
+template <typename T>
+void write_vec(std::ofstream& f, const std::vector<T>& v) {
+  const uint64_t n = v.size();
+  f.write(reinterpret_cast<const char*>(&n), sizeof n);
+  f.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+}
+
+template <typename T>
+bool read_vec(std::ifstream& f, std::vector<T>& v, uint64_t expected) {
+  uint64_t n = 0;
+  f.read(reinterpret_cast<char*>(&n), sizeof n);
+  if (!f || n != expected) return false;
+  v.resize(n);
+  f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+  return static_cast<bool>(f);
+}
+
+// The cached analysis of a graph whose size, levels, exemplars and slots are already in `a`.
+bool load_graph_cache(const std::filesystem::path& file, GraphAnalysis& a) {
+  std::ifstream f(file, std::ios::binary);
+  if (!f) return false;
+  uint32_t head[2] = {0, 0};
+  int32_t slots = -1;
+  f.read(reinterpret_cast<char*>(head), sizeof head);
+  f.read(reinterpret_cast<char*>(&slots), sizeof slots);
+  if (!f || head[0] != kGraphMagic || head[1] != kGraphCacheVersion || slots < 0 || slots > 64) return false;
+  a.slots = slots;
+  const uint64_t n = static_cast<uint64_t>(a.width) * a.height, N = a.nodes(), M = static_cast<uint64_t>(slots);
+  if (!read_vec(f, a.appearance, N * n * kDims) || !read_vec(f, a.feature, N * n * kDims) ||
+      !read_vec(f, a.coherent, N * n) || !read_vec(f, a.link_node, N * M) || !read_vec(f, a.link_texel, N * M * n) ||
+      !read_vec(f, a.link_offset, N * M * n * 4) || !read_vec(f, a.projection, uint64_t(kNeighbourDims) * kDims) ||
+      !read_vec(f, a.offset_response, uint64_t(kDims) * 3) || !read_vec(f, a.colour, N * n * 3))
+    return false;
+  for (int32_t c : a.coherent)
+    if (c < 0 || static_cast<uint64_t>(c) >= n) return false;
+  for (int32_t c : a.link_texel)
+    if (c < 0 || static_cast<uint64_t>(c) >= n) return false;
+  for (int32_t c : a.link_node)
+    if (c < -1 || static_cast<uint64_t>(c + 1) > N) return false;
+  char extra;
+  return !f.read(&extra, 1);
+}
+
+void save_graph_cache(const std::filesystem::path& file, const GraphAnalysis& a) {
+  std::error_code ec;
+  std::filesystem::create_directories(file.parent_path(), ec);
+  const auto tmp = file.string() + fmt::format(".tmp{}", static_cast<long>(::getpid()));
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) return;  // the cache is an optimisation
+    const uint32_t head[2] = {kGraphMagic, kGraphCacheVersion};
+    const int32_t slots = a.slots;
+    f.write(reinterpret_cast<const char*>(head), sizeof head);
+    f.write(reinterpret_cast<const char*>(&slots), sizeof slots);
+    write_vec(f, a.appearance);
+    write_vec(f, a.feature);
+    write_vec(f, a.coherent);
+    write_vec(f, a.link_node);
+    write_vec(f, a.link_texel);
+    write_vec(f, a.link_offset);
+    write_vec(f, a.projection);
+    write_vec(f, a.offset_response);
+    write_vec(f, a.colour);
+    if (!f) {
+      f.close();
+      std::filesystem::remove(tmp, ec);
+      return;
+    }
+  }
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) std::filesystem::remove(tmp, ec);
+}
+
+}  // namespace
+
+GraphAnalysis analyse_graph_cached(const LoadedGraph& lg, const std::filesystem::path& cache_dir) {
+  if (cache_dir.empty()) return analyse_graph(lg);
+  GraphAnalysis a;
+  a.width = lg.images[0].width;
+  a.height = lg.images[0].height;
+  a.levels = level_count(a.width, a.height);
+  a.exemplars = static_cast<int>(lg.images.size());
+  a.toroidal = lg.toroidal;
+  a.hash = graph_hash(lg);
+  const auto file = cache_dir / ("graph-" + a.hash + ".bin");
+  if (load_graph_cache(file, a)) {
+    a.from_cache = true;
+    return a;
+  }
+  GraphAnalysis fresh = analyse_graph(lg);
+  save_graph_cache(file, fresh);
+  return fresh;
+}
 
 LoadedGraph load_graph(ExemplarGraph graph) {
   LoadedGraph g;
@@ -405,13 +521,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
   const size_t n = static_cast<size_t>(w) * h;
   const size_t N = a.nodes();
 
-  std::string key = fmt::format("proctex-graph v1 {}x{} e{}|", w, h, a.exemplars);
-  for (const auto& e : lg.graph.edges) key += fmt::format("{},{},{};", e.from, e.to, e.r);
-  for (size_t i = 0; i < lg.images.size(); ++i) {
-    key += fmt::format("t{}|", int(lg.toroidal[i]));
-    key.append(reinterpret_cast<const char*>(lg.images[i].pixels.data()), lg.images[i].pixels.size() * sizeof(float));
-  }
-  a.hash = fnv1a_hex(key);
+  a.hash = graph_hash(lg);
 
   // Gaussian stacks of the sRGB-encoded colours; node n = i * (L + 1) + k.
   std::vector<std::vector<float>> planes(N);  // planar 3 x n per node
@@ -610,6 +720,16 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
       }
       G[k][c] = acc;
     }
+  std::vector<float> mean_free(N * n * kDims, 0.0f);
+  parallel_for(static_cast<int>(N), [&](int nd) {
+    if (!used[nd]) return;
+    for (size_t t = 0; t < n; ++t)
+      for (int k = 0; k < kDims; ++k) {
+        double v = a.feature[(nd * n + t) * kDims + k];
+        for (int c = 0; c < 3; ++c) v -= G[k][c] * local_mean[(nd * n + t) * 3 + c];
+        mean_free[(nd * n + t) * kDims + k] = static_cast<float>(v);
+      }
+  });
   a.link_texel.assign(N * M * n, 0);
   a.link_offset.assign(N * M * n * 4, 0);
   parallel_for(static_cast<int>(N * M), [&](int job) {
@@ -634,18 +754,17 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
       };
       nn = patch_match(w, h, lg.toroidal[j] != 0, 1 << r, 0, seed, dist);
     } else {
-      // Between exemplars: match the structure whatever the mean colour (the offset b repairs it).
-      const float* ma = local_mean.data() + nd * n * 3;
-      const float* mb = local_mean.data() + static_cast<size_t>(dst) * n * 3;
+      // Between exemplars: match the structure whatever the mean colour (the offset b repairs it):
+      // |fa - (fb + G (ma - mb))| = |(fa - G ma) - (fb - G mb)|, the mean-free features.
+      const float* ma = mean_free.data() + nd * n * kDims;
+      const float* mb = mean_free.data() + static_cast<size_t>(dst) * n * kDims;
       auto dist = [&](size_t p, size_t q) {
-        double d = 0;
+        float d = 0;
         for (int k = 0; k < kDims; ++k) {
-          double shift = 0;
-          for (int c = 0; c < 3; ++c) shift += G[k][c] * (ma[p * 3 + c] - mb[q * 3 + c]);
-          const double e = fa[p * kDims + k] - (fb[q * kDims + k] + shift);
+          const float e = ma[p * kDims + k] - mb[q * kDims + k];
           d += e * e;
         }
-        return static_cast<int64_t>(std::llround(d));
+        return static_cast<int64_t>(d * 16.0f);
       };
       nn = patch_match(w, h, lg.toroidal[j] != 0, 1 << r, 0, seed, dist);
     }
@@ -669,7 +788,7 @@ struct GraphSynthesizer::Device {
   cl::Program program;
   cl::Kernel upsample, correct;
   cl::Buffer appearance, feature, coherent, link_node, link_texel, link_offset, projection, offset_response,
-      projection_sum, toroidal;
+      offset_tap, offset_sum, toroidal, admissible;
 };
 
 GraphSynthesizer::GraphSynthesizer(const LoadedGraph& graph, const GraphAnalysis& a)
@@ -690,12 +809,34 @@ GraphSynthesizer::GraphSynthesizer(const LoadedGraph& graph, const GraphAnalysis
   d.link_offset = ocl::upload(a.link_offset);
   d.projection = ocl::upload(a.projection);
   d.offset_response = ocl::upload(a.offset_response);
-  std::vector<int32_t> ps(kDims * kDims, 0);
-  for (int dd = 0; dd < kDims; ++dd)
+  // GT[t][k][c] = sum_d P[t][d][k] AR[d][c]: the projected-feature change of a colour offset on tap t
+  // (shift 8 of P + shift 16 of AR); GS = the sum over the taps (an offset on the whole neighbourhood).
+  std::vector<cl_long> gt(kTaps * kDims * 3, 0), gs(kDims * 3, 0);
+  for (int t = 0; t < kTaps; ++t)
     for (int k = 0; k < kDims; ++k)
-      for (int t = 0; t < kTaps; ++t) ps[dd * kDims + k] += a.projection[(t * kDims + dd) * kDims + k];
-  d.projection_sum = ocl::upload(ps);
+      for (int c = 0; c < 3; ++c) {
+        int64_t acc = 0;
+        for (int dd = 0; dd < kDims; ++dd)
+          acc += int64_t(a.projection[(t * kDims + dd) * kDims + k]) * a.offset_response[dd * 3 + c];
+        gt[(t * kDims + k) * 3 + c] = acc;
+        gs[k * 3 + c] += acc;
+      }
+  d.offset_tap = ocl::upload(gt);
+  d.offset_sum = ocl::upload(gs);
   d.toroidal = ocl::upload(a.toroidal);
+  // adm[m][n]: 2 = n is m itself or linked by a scale-1 edge (same level), 1 = n is admissible for m
+  // (Han's A(m), the finest level included: the schedule's `valid` excludes it before the output).
+  const int L = a.levels;
+  const size_t N = a.nodes();
+  std::vector<unsigned char> adm(N * N, 0);
+  for (size_t m = 0; m < N; ++m) {
+    const StackLevel from{static_cast<int>(m / (L + 1)), static_cast<int>(m % (L + 1))};
+    for (const auto& s : admissible(graph.graph, L, from, true)) {
+      const size_t n = static_cast<size_t>(s.exemplar) * (L + 1) + s.level;
+      adm[m * N + n] = s.level == from.level ? 2 : 1;
+    }
+  }
+  d.admissible = ocl::upload(adm);
 }
 
 GraphSynthesizer::~GraphSynthesizer() = default;
@@ -759,8 +900,9 @@ std::vector<GraphPixel> GraphSynthesizer::synthesise(const Window& win, const Sy
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, R, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                  static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1),
                  static_cast<cl_int>(sub >> 1), dev.appearance, dev.feature, dev.coherent, dev.link_node,
-                 dev.link_texel, dev.link_offset, static_cast<cl_int>(a.slots), dev.projection, dev.offset_response,
-                 dev.projection_sum, valid, dev.toroidal, static_cast<cl_int>(L), static_cast<cl_int>(a.width),
+                 dev.link_texel, dev.link_offset, static_cast<cl_int>(a.slots), dev.projection, dev.offset_tap,
+                 dev.offset_sum, valid, dev.admissible, static_cast<cl_int>(a.nodes()), dev.toroidal,
+                 static_cast<cl_int>(L), static_cast<cl_int>(a.width),
                  static_cast<cl_int>(a.height), static_cast<cl_int>(std::lround(o.kappa * 256)));
       }
     }

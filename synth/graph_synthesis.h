@@ -47,7 +47,8 @@ struct GraphAnalysis {
   std::vector<int32_t> offset_response;  // [8][3] appearance change per colour offset (shift 16)
   std::vector<float> colour;         // [n][t][3] the stack level's colour, sRGB-encoded
   std::string hash;                  // content hash of the exemplars and edges
-  double seconds = 0;
+  double seconds = 0;       // analysis time (0 when loaded from the cache)
+  bool from_cache = false;
   size_t nodes() const { return static_cast<size_t>(exemplars) * (levels + 1); }
 };
 
@@ -66,6 +67,10 @@ LoadedGraph load_graph(ExemplarGraph graph);
 int graph_levels(const LoadedGraph& graph);
 
 GraphAnalysis analyse_graph(const LoadedGraph& graph);
+
+// Analyses, or loads the analysis cached in `cache_dir` (file graph-HASH.bin, HASH over the exemplars'
+// pixels, "tiles" and the edges); an empty path disables the cache, a damaged file is ignored.
+GraphAnalysis analyse_graph_cached(const LoadedGraph& graph, const std::filesystem::path& cache_dir);
 
 // One synthesised pixel: exemplar texel (x, y) of stack level `level` of exemplar `exemplar`, and
 // the colour offset (r, g, b) in kOffsetUnits.

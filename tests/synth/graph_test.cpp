@@ -331,6 +331,7 @@ std::vector<std::string> files_in(const std::filesystem::path& dir) {
 
 TEST(SynthGraphCli, WritesTheOutputCoordsAndJson) {
   TempDir dir;
+  setenv("PROCTEX_CACHE_DIR", (dir / "cache").c_str(), 1);  // the analysis cache of the child process
   save_image(gravel(64, 0, 0), dir / "a.png");
   save_image(gravel(64, 256, 256), dir / "b.png");
   std::ofstream(dir / "g.json") << R"({"exemplars": ["a.png", "b.png"],
@@ -353,7 +354,7 @@ TEST(SynthGraphCli, WritesTheOutputCoordsAndJson) {
   }
   // The same command again gives the same bytes (seeded, deterministic).
   const auto again = testing::run_proctex("synth --graph '" + (dir / "g.json").string() + "' -o '" +
-                                              (dir / "out2.png").string() + "' --size 96x64 --zoom 5 -q",
+                                              (dir / "out2.png").string() + "' --size 96x64 --zoom 5",
                                           dir.path());
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_EQ(testing::read_text(dir / "out.png"), testing::read_text(dir / "out2.png"));
@@ -361,6 +362,7 @@ TEST(SynthGraphCli, WritesTheOutputCoordsAndJson) {
 
 TEST(SynthGraphCli, BadGraphsAreOneLineAndLeaveNoFile) {
   TempDir dir;
+  setenv("PROCTEX_CACHE_DIR", (dir / "cache").c_str(), 1);
   save_image(gravel(64), dir / "a.png");
   save_image(gravel(32), dir / "small.png");
   auto graph = [&](const std::string& name, const std::string& text) {
