@@ -382,7 +382,7 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();
-  cmd->add_option("--coords", o->coords, "Also write the exemplar coordinate map (.exr: R = x, G = y in pixels)");
+  cmd->add_option("--coords", o->coords, "Also write the exemplar coordinate map (.exr: R = x, G = y in pixels; with --graph B = the exemplar index)");
   cmd->add_option("--apply", o->apply,
                   "Carry an aligned map through the same synthesis: [KIND=]IN:OUT, KIND = normal, height, "
                   "roughness, grey or colour (guessed from the file name); repeatable")
