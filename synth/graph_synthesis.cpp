@@ -27,6 +27,7 @@ constexpr int kDims = kAppearanceDims;  // 8
 constexpr int kTaps = kNeighbourTaps;   // 5
 constexpr int kColourTaps = 25;
 constexpr int kAppIn = kColourTaps * 3;  // 75
+constexpr int kLinkBias = 4;  // a continuing link may be 4/3 as far as the best (patch_match)
 
 inline int wrap(int x, int n) {
   const int r = x % n;
@@ -137,8 +138,12 @@ struct SplitMix {
 // PatchMatch: for every texel of a source stack level, the texel of a destination level (same
 // size) minimising dist(source texel, destination texel); `step` = destination texels per source
 // texel (2^r along an edge of scale r), `sep` > 0 = the match must be that far away (same level).
+// `bias` > 0: a propagated match (continuing its neighbour's) counts (1 - 1/bias) of its distance, so
+// the field of links stays coherent where a continuation is nearly as good (links made this way grow
+// patches in the synthesis instead of scattering them).
 template <typename Dist>
-std::vector<int32_t> patch_match(int w, int h, bool dst_toroidal, int step, int sep, uint64_t seed, Dist dist) {
+std::vector<int32_t> patch_match(int w, int h, bool dst_toroidal, int step, int sep, uint64_t seed, Dist dist,
+                                 int bias = 0) {
   const size_t n = static_cast<size_t>(w) * h;
   auto far_enough = [&](int x0, int y0, int x1, int y1) {
     if (sep <= 0) return true;
@@ -158,12 +163,13 @@ std::vector<int32_t> patch_match(int w, int h, bool dst_toroidal, int step, int 
     nn[i] = cy * w + cx;
     best[i] = dist(i, static_cast<size_t>(nn[i]));
   }
-  auto consider = [&](size_t i, int x, int y, int cx, int cy) {
+  auto consider = [&](size_t i, int x, int y, int cx, int cy, bool propagated = false) {
     cx = dst_toroidal ? wrap(cx, w) : std::clamp(cx, 0, w - 1);
     cy = dst_toroidal ? wrap(cy, h) : std::clamp(cy, 0, h - 1);
     if (!far_enough(x, y, cx, cy)) return;
     const size_t c = static_cast<size_t>(cy) * w + cx;
-    const int64_t d = dist(i, c);
+    int64_t d = dist(i, c);
+    if (propagated && bias > 0) d -= d / bias;
     if (d < best[i] || (d == best[i] && static_cast<int32_t>(c) < nn[i])) best[i] = d, nn[i] = static_cast<int32_t>(c);
   };
   for (int it = 0; it < 3; ++it) {
@@ -175,11 +181,11 @@ std::vector<int32_t> patch_match(int w, int h, bool dst_toroidal, int step, int 
       const int px = x - dir, py = y - dir;
       if (px >= 0 && px < w) {
         const int j = nn[static_cast<size_t>(y) * w + px];
-        consider(i, x, y, j % w + dir * step, j / w);
+        consider(i, x, y, j % w + dir * step, j / w, true);
       }
       if (py >= 0 && py < h) {
         const int j = nn[static_cast<size_t>(py) * w + x];
-        consider(i, x, y, j % w, j / w + dir * step);
+        consider(i, x, y, j % w, j / w + dir * step, true);
       }
       for (int r = std::max(w, h) / 2; r >= 1; r /= 2) {
         const int bx = nn[i] % w, by = nn[i] / w;
@@ -373,7 +379,7 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 namespace {
 
-constexpr uint32_t kGraphCacheVersion = 1;
+constexpr uint32_t kGraphCacheVersion = 2;
 constexpr uint32_t kGraphMagic = 0x47525048;  // "GRPH"
 
 std::string graph_hash(const LoadedGraph& lg) {
@@ -752,7 +758,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
         }
         return d;
       };
-      nn = patch_match(w, h, lg.toroidal[j] != 0, 1 << r, 0, seed, dist);
+      nn = patch_match(w, h, lg.toroidal[j] != 0, 1 << r, 0, seed, dist, kLinkBias);
     } else {
       // Between exemplars: match the structure whatever the mean colour (the offset b repairs it):
       // |fa - (fb + G (ma - mb))| = |(fa - G ma) - (fb - G mb)|, the mean-free features.
@@ -766,7 +772,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
         }
         return static_cast<int64_t>(d * 16.0f);
       };
-      nn = patch_match(w, h, lg.toroidal[j] != 0, 1 << r, 0, seed, dist);
+      nn = patch_match(w, h, lg.toroidal[j] != 0, 1 << r, 0, seed, dist, kLinkBias);
     }
     const size_t base = (nd * M + s) * n;
     std::copy(nn.begin(), nn.end(), a.link_texel.begin() + base);
