@@ -793,7 +793,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
 struct GraphSynthesizer::Device {
   cl::Program program;
   cl::Kernel upsample, correct;
-  cl::Buffer appearance, feature, coherent, link_node, link_texel, link_offset, projection, offset_response,
+  cl::Buffer appearance, feature, coherent, link_node, link_texel, link_offset, projection,
       offset_tap, offset_sum, toroidal, admissible;
 };
 
@@ -814,7 +814,6 @@ GraphSynthesizer::GraphSynthesizer(const LoadedGraph& graph, const GraphAnalysis
   d.link_texel = ocl::upload(a.link_texel);
   d.link_offset = ocl::upload(a.link_offset);
   d.projection = ocl::upload(a.projection);
-  d.offset_response = ocl::upload(a.offset_response);
   // GT[t][k][c] = sum_d P[t][d][k] AR[d][c]: the projected-feature change of a colour offset on tap t
   // (shift 8 of P + shift 16 of AR); GS = the sum over the taps (an offset on the whole neighbourhood).
   std::vector<cl_long> gt(kTaps * kDims * 3, 0), gs(kDims * 3, 0);
