@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "kernels/runtime.h"
 #include "synth/analysis.h"
+#include "synth/graph_synthesis.h"
 #include "synth/render.h"
 #include "synth/synthesis.h"
 
@@ -39,6 +40,8 @@ struct SynthCliOptions {
   std::string cache_dir;
   bool no_cache = false;
   bool json = false;
+  std::string graph;  // --graph g.json: a multiscale exemplar graph instead of one exemplar
+  int zoom = 0;
 };
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -99,8 +102,109 @@ std::vector<float> parse_randomness(const std::string& text) {
   return out;
 }
 
+// proctex synth --graph g.json: synthesis on a multiscale exemplar graph (synth/graph_synthesis.h).
+void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
+  using namespace synth;
+  if (!o.exemplar.empty())
+    throw UsageError(fmt::format("give either an exemplar ('{}') or --graph, not both", o.exemplar),
+                     "the graph file lists its exemplars");
+  if (o.tileable || !o.jitter_map.empty() || !o.pastes.empty() || !o.apply.empty() || o.exemplar_tiles != "auto")
+    throw UsageError("--tileable, --jitter-map, --paste, --apply and --exemplar-tiles are not available with --graph",
+                     "set \"tiles\" per exemplar in the graph file");
+  int width = 0, height = 0;
+  parse_size(o.size, width, height);
+  Window window{0, 0, width, height};
+  if (!o.window.empty()) window = parse_window(o.window);
+  check_dimensions(window.width, window.height);
+  if (o.zoom < 0 || o.zoom > kMaxGraphZoom)
+    throw UsageError(fmt::format("--zoom {} is out of range", o.zoom), fmt::format("use 0..{}", kMaxGraphZoom));
+  SynthOptions options;
+  options.seed = static_cast<uint32_t>(o.seed);
+  options.randomness = parse_randomness(o.randomness);
+  options.passes = o.passes;
+  options.kappa = o.kappa;
+  std::vector<StripTarget> files{{o.output, false}};
+  if (!o.coords.empty()) files.push_back({o.coords, true});
+  RenderOutputs check;
+  check.colour = o.output;
+  check.coords = o.coords;
+  check.bits = o.bits;
+  check_outputs(check, Exemplar{});
+
+  const LoadedGraph graph = load_graph(std::filesystem::path(o.graph));
+  const LevelSchedule schedule = level_schedule(graph.graph, graph_levels(graph), o.zoom);  // zoom check first
+  (void)schedule;
+  Progress analysing("analysing the graph", 1, global.quiet || o.json);
+  const std::filesystem::path cache = o.no_cache ? std::filesystem::path()
+                                      : !o.cache_dir.empty() ? std::filesystem::path(o.cache_dir)
+                                                             : default_cache_dir();
+  const GraphAnalysis analysis = analyse_graph_cached(graph, cache);
+  analysing.finish();
+  GraphSynthesizer synth(graph, analysis);
+  Progress progress("synthesising", 100, global.quiet || o.json);
+  // Strips of at most 4 M pixels (the single-exemplar renderer's bound).
+  const int rows = static_cast<int>(std::clamp<int64_t>((int64_t(1) << 22) / window.width, 1, window.height));
+  std::vector<int64_t> per_exemplar(graph.images.size(), 0);
+  const RenderStats stats = write_strips(
+      files, window.width, window.height, o.bits, rows,
+      [&](int y0, int n, std::vector<std::vector<float>>& data) {
+        const Window strip{window.x, window.y + y0, window.width, n};
+        const auto px = synth.synthesise(strip, options, o.zoom);
+        data[0] = synth.colours(px);
+        for (const auto& p : px) ++per_exemplar[p.exemplar];
+        if (files.size() > 1)
+          for (size_t i = 0; i < px.size(); ++i) {
+            data[1][3 * i] = static_cast<float>(px[i].x);
+            data[1][3 * i + 1] = static_cast<float>(px[i].y);
+            data[1][3 * i + 2] = static_cast<float>(px[i].exemplar);
+          }
+      },
+      [&](double f) { progress.update(static_cast<long>(f * 100)); });
+  progress.finish();
+  const int mz = max_zoom(graph.graph, analysis.levels);
+  if (o.json) {
+    nlohmann::json ex = nlohmann::json::array();
+    for (size_t i = 0; i < graph.images.size(); ++i)
+      ex.push_back({{"image", graph.graph.exemplars[i].image.string()},
+                    {"tiles", graph.toroidal[i] != 0},
+                    {"pixels", per_exemplar[i]}});
+    nlohmann::json edges = nlohmann::json::array();
+    for (const auto& e : graph.graph.edges) edges.push_back({{"from", e.from}, {"to", e.to}, {"scale", 1 << e.r}});
+    print_json({{"output", o.output},
+                {"graph", o.graph},
+                {"exemplars", ex},
+                {"edges", edges},
+                {"exemplar_size", {analysis.width, analysis.height}},
+                {"zoom", o.zoom},
+                {"max_zoom", mz < 0 ? nlohmann::json("unbounded") : nlohmann::json(mz)},
+                {"levels", analysis.levels + o.zoom},
+                {"window", {window.x, window.y, window.width, window.height}},
+                {"seed", options.seed},
+                {"randomness", options.randomness},
+                {"passes", options.passes},
+                {"coherence", options.kappa},
+                {"coords", o.coords},
+                {"analysis_hash", analysis.hash},
+                {"analysis_cached", analysis.from_cache},
+                {"analysis_seconds", analysis.seconds},
+                {"synthesis_seconds", stats.seconds},
+                {"strips", stats.strips},
+                {"device", ocl::Runtime::instance().device().name}});
+  } else if (!global.quiet) {
+    std::printf("%s: %dx%d at (%lld, %lld), zoom %d, from the %zu-exemplar graph %s (%dx%d) seed %u in %s "
+                "(analysis %s)\n",
+                o.output.c_str(), window.width, window.height, static_cast<long long>(window.x),
+                static_cast<long long>(window.y), o.zoom, graph.images.size(), o.graph.c_str(), analysis.width,
+                analysis.height, options.seed, format_seconds(stats.seconds).c_str(),
+                analysis.from_cache ? "cached" : format_seconds(analysis.seconds).c_str());
+  }
+}
+
 void run(const SynthCliOptions& o, const GlobalOptions& global) {
   using namespace synth;
+  if (!o.graph.empty()) return run_graph(o, global);
+  if (o.exemplar.empty()) throw UsageError("an exemplar image is required", "proctex synth EXEMPLAR -o out.png (or --graph g.json)");
+  if (o.zoom != 0) throw UsageError("--zoom needs --graph", "a single exemplar has no finer detail than its own pixels");
   // Parse and check everything before reading pixels or writing files.
   int width = 0, height = 0;
   parse_size(o.size, width, height);
@@ -248,9 +352,11 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
       "  proctex synth rocks.png -o part.png --window -4096,8192,512,512 --seed 7\n"
       "  proctex synth rocks.png -o out.png --apply normal=rocks_n.png:out_n.png --apply rocks_h.png:out_h.png\n"
       "  proctex synth rocks.png -o out.png --randomness 1,1,0.6,0.3   # coarse levels first\n"
+      "  proctex synth --graph g.json -o map.png --size 16384 --zoom 6   # multiscale exemplar graph\n"
       "The analysis (Gaussian stack, appearance space, k-coherence) is cached in $PROCTEX_CACHE_DIR/synth\n"
       "(default ~/.cache/proctex/synth) under the exemplar's content hash.");
-  cmd->add_option("exemplar", o->exemplar, "Example image (PNG, JPEG, TIFF, EXR), 16..512 px per side")->required();
+  cmd->add_option("exemplar", o->exemplar, "Example image (PNG, JPEG, TIFF, EXR), 16..512 px per side (required "
+                                           "unless --graph)");
   cmd->add_option("-o,--output", o->output, "Output image (.png, .tif, .exr, .jpg)")->required();
   cmd->add_option("--size", o->size, "Output size WxH or N (also the period with --tileable)")->capture_default_str();
   cmd->add_option("--window", o->window,
@@ -276,7 +382,7 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();
-  cmd->add_option("--coords", o->coords, "Also write the exemplar coordinate map (.exr: R = x, G = y in pixels)");
+  cmd->add_option("--coords", o->coords, "Also write the exemplar coordinate map (.exr: R = x, G = y in pixels; with --graph B = the exemplar index)");
   cmd->add_option("--apply", o->apply,
                   "Carry an aligned map through the same synthesis: [KIND=]IN:OUT, KIND = normal, height, "
                   "roughness, grey or colour (guessed from the file name); repeatable")
@@ -287,6 +393,12 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--cache-dir", o->cache_dir, "Folder for cached analyses (default $PROCTEX_CACHE_DIR/synth)");
   cmd->add_flag("--no-cache", o->no_cache, "Analyse again and do not cache");
   cmd->add_flag("--json", o->json, "Print what was synthesised as JSON");
+  cmd->add_option("--graph", o->graph,
+                  "Multiscale exemplar graph (Han): a JSON file of exemplars and edges {from, to, scale} instead "
+                  "of one exemplar; see docs/synth.md");
+  cmd->add_option("--zoom", o->zoom,
+                  "With --graph: output scale, an output pixel spans 2^-ZOOM root exemplar pixels (a self edge "
+                  "zooms without end)")->capture_default_str();
   cmd->callback([o, &global] { run(*o, global); });
 }
 

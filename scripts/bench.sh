@@ -52,4 +52,8 @@ if [[ -x "$build/bench/bench_synth" ]] && command -v gmic >/dev/null 2>&1; then
   "$build/bench/bench_synth" --exemplars "$build/bench-synth/exemplars" --work "$build/bench-synth" \
     --proctex "$build/cli/proctex" --markdown "$results/synth.md" --sheet "$results/synth-bench.png"
 fi
+if [[ -x "$build/cli/proctex" && -d /usr/share/games/etr/terrains ]] && command -v oiiotool >/dev/null 2>&1; then
+  echo "== bench/synth_graph.sh (proctex synth --graph: 16384^2 from three 256^2 exemplars; several minutes)"
+  bench/synth_graph.sh "$build/cli/proctex" "$build/bench-synth-graph" | tee "$results/synth-graph.txt"
+fi
 echo "bench: tables in $results/"

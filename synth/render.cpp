@@ -232,4 +232,54 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
   return stats;
 }
 
+RenderStats write_strips(const std::vector<StripTarget>& files, int width, int height, int bits, int rows_per_strip,
+                         const std::function<void(int, int, std::vector<std::vector<float>>&)>& produce,
+                         const std::function<void(double)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::unique_ptr<StripFile>> out;
+  std::vector<OIIO::TypeDesc> types;
+  for (const auto& f : files) {
+    const OIIO::TypeDesc t = f.raw ? OIIO::TypeDesc::FLOAT : file_type(f.path, bits);
+    types.push_back(t);
+    out.push_back(std::make_unique<StripFile>(f.path, width, height, t, f.raw || t == OIIO::TypeDesc::HALF));
+  }
+  RenderStats stats;
+  rows_per_strip = std::clamp(rows_per_strip, 1, height);
+  std::vector<std::vector<float>> data(files.size());
+  std::vector<unsigned char> bytes;
+  for (int y0 = 0; y0 < height; y0 += rows_per_strip) {
+    const int rows = std::min(rows_per_strip, height - y0);
+    const size_t n = static_cast<size_t>(width) * rows * 3;
+    for (auto& d : data) d.assign(n, 0.0f);
+    produce(y0, rows, data);
+    stats.peak_strip_pixels = std::max(stats.peak_strip_pixels, n / 3);
+    for (size_t k = 0; k < files.size(); ++k) {
+      auto& d = data[k];
+      if (files[k].raw) {
+        out[k]->write(y0, rows, OIIO::TypeDesc::FLOAT, d.data());
+      } else if (types[k] == OIIO::TypeDesc::HALF) {
+        for (float& v : d) v = srgb_to_linear(std::clamp(v, 0.0f, 1.0f));
+        out[k]->write(y0, rows, OIIO::TypeDesc::FLOAT, d.data());
+      } else if (types[k] == OIIO::TypeDesc::UINT16) {
+        bytes.resize(n * 2);
+        for (size_t i = 0; i < n; ++i) {
+          const uint16_t v = static_cast<uint16_t>(std::lround(std::clamp(d[i], 0.0f, 1.0f) * 65535.0f));
+          std::memcpy(&bytes[i * 2], &v, 2);
+        }
+        out[k]->write(y0, rows, OIIO::TypeDesc::UINT16, bytes.data());
+      } else {
+        bytes.resize(n);
+        for (size_t i = 0; i < n; ++i) bytes[i] = static_cast<unsigned char>(std::lround(std::clamp(d[i], 0.0f, 1.0f) * 255.0f));
+        out[k]->write(y0, rows, OIIO::TypeDesc::UINT8, bytes.data());
+      }
+    }
+    ++stats.strips;
+    if (progress) progress(double(y0 + rows) / height);
+  }
+  for (auto& f : out) f->close();
+  for (auto& f : out) f->commit();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
 }  // namespace proctex::synth

@@ -34,6 +34,18 @@ RenderStats render(Synthesizer& synth, const Exemplar& exemplar, const Window& w
                    const RenderOutputs& outputs, const std::function<void(double)>& progress = {},
                    size_t max_strip_pixels = size_t(1) << 22);
 
+// Writes images produced strip by strip (used by the graph synthesis): `produce(y0, rows, data)` fills
+// one buffer per file with 3 floats per pixel: sRGB-encoded colour in [0, 1] for a colour file
+// (converted to linear for EXR), raw values for a `raw` file (a coordinate map, written as float).
+// Files go to temporaries renamed when all are complete, like render().
+struct StripTarget {
+  std::filesystem::path path;
+  bool raw = false;
+};
+RenderStats write_strips(const std::vector<StripTarget>& files, int width, int height, int bits, int rows_per_strip,
+                         const std::function<void(int y0, int rows, std::vector<std::vector<float>>& data)>& produce,
+                         const std::function<void(double)>& progress = {});
+
 // The colour of a coordinate map (linear RGB), for tests and small outputs.
 Image colours_of(const std::vector<int32_t>& coords, int width, int height, const Image& source);
 
