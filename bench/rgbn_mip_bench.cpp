@@ -2,7 +2,7 @@
 // supersampled truth (Han et al. ch. 7), for footprints 2x2 .. 16x16 and exponents 8, 32, 128.
 // Target (issue 14): the vMF mixture at least 30% below Toksvig where footprints hold several
 // normal modes (2-8 texels), and never worse than Toksvig. Prints markdown tables.
-//   bench_rgbn_mip [--size 256] [--lobes 4] [--iterations 12] [--seed 0]
+//   bench_rgbn_mip [--size 256] [--lobes 6] [--iterations 12] [--seed 0]
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -62,7 +62,7 @@ Rgbn brick(int S) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int size = 256, lobes = 4, iterations = MipOptions{}.iterations;
+  int size = 256, lobes = MipOptions{}.lobes, iterations = MipOptions{}.iterations;
   unsigned seed = 0;  // added to the facet maps' seeds (robustness check: other random maps)
   for (int i = 1; i + 1 < argc; ++i) {
     if (!std::strcmp(argv[i], "--size")) size = std::atoi(argv[++i]);

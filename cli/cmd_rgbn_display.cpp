@@ -82,7 +82,7 @@ struct MipCliOptions {
   std::vector<std::string> methods = {"naive", "toksvig", "vmf", "sh"};
   std::vector<int> footprints = {2, 4, 8, 16};
   std::vector<float> exponents = {8, 32, 128};
-  int lobes = 4, sh_order = 6;
+  int lobes = MipOptions{}.lobes, sh_order = 6;
   float shade_exponent = 64;
   bool json = false, errors = true;
 };
@@ -94,7 +94,7 @@ void run_mip(const MipCliOptions& o, const GlobalOptions& g) {
   fs::create_directories(o.output_dir);
   MipOptions mo;
   mo.lobes = o.lobes, mo.sh_order = o.sh_order;
-  if (o.lobes < 1 || o.lobes > 16) throw UsageError("--lobes must be in [1, 16]", "e.g. --lobes 4");
+  if (o.lobes < 1 || o.lobes > 16) throw UsageError("--lobes must be in [1, 16]", "e.g. --lobes 6");
   if (o.sh_order < 0 || o.sh_order > 16) throw UsageError("--sh-order must be in [0, 16]", "e.g. --sh-order 6");
   const Vec3 l = parse_light(o.light);
   Vec3 h = {l[0], l[1], l[2] + 1};
