@@ -186,8 +186,11 @@ void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
     so.seed = o.seed, so.normal_weight = o.normal_weight, so.randomness = o.randomness, so.passes = o.passes;
     so.coherence = o.coherence, so.compose = o.compose, so.xi = o.xi, so.windows = o.windows;
     if (!o.no_cache) so.cache_dir = synth_cache_dir();
+    Progress progress(o.fill.empty() ? "synthesising" : "trying windows", 100, g.quiet || o.json);
+    so.progress = [&](double f) { progress.update(long(f * 100)); };
     ExemplarSynthResult r = o.fill.empty() ? exemplar_synthesize(ex, o.width, o.height, so)
                                            : exemplar_fill(ex, target, mask, so);
+    progress.finish();
     image = std::move(r.image);
     visited = r.visited;
     j.update({{"normal_weight", o.normal_weight}, {"passes", o.passes}, {"coherence", o.coherence},

@@ -10,6 +10,7 @@
 // to its smoothed base normals) composed on the smoothed base normals of the target region.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,7 @@ struct ExemplarSynthOptions {
   int windows = 16;                  // fill: candidate windows tried
   int ring = 4;                      // fill: width of the matching ring around the region (pixels)
   std::filesystem::path cache_dir;   // synth/'s analysis cache; empty = no cache
+  std::function<void(double)> progress;  // optional: fraction done, after each strip or window
 };
 struct ExemplarSynthResult {
   Rgbn image;

@@ -92,6 +92,7 @@ ExemplarSynthResult exemplar_synthesize(const Rgbn& ex, int w, int h, const Exem
       std::copy_n(&ex.albedo[3 * size_t(s)], 3, &r.image.albedo[3 * q]);
       std::copy_n(&ex.normal[3 * size_t(s)], 3, &r.image.normal[3 * q]);
     }
+    if (o.progress) o.progress(double(y0 + sh) / h);
   }
   r.visited = r.image.size();
   if (o.xi >= 0) detail::saturate_synthesised(r.image, Rgbn(w, h), r.source, o.xi);
@@ -161,6 +162,7 @@ ExemplarSynthResult exemplar_fill(const Rgbn& ex, const Rgbn& target, const Mask
     }
     err /= std::max<size_t>(1, ring.size());
     if (err < best) best = err, best_coords = std::move(c), r.window_x = ox, r.window_y = oy;
+    if (o.progress) o.progress(double(k + 1) / o.windows);
   }
   r.ring_error = ring.empty() ? 0.0 : best;
   for (int y = y0; y <= y1; ++y)
