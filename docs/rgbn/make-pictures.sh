@@ -27,7 +27,8 @@ q rgbn light "$w/b.exr" --light $L --model blinn --grey --exponent 24 --specular
 q rgbn view "$w/b.exr" --view albedo -o "$w/b_albedo.png"
 q rgbn view "$w/b.exr" --view normals -o "$w/b_normals.png"
 q rgbn view "$w/b.exr" --view needles --spacing 12 -o "$w/b_needles.png"
-panel $out/views.jpg albedo "$w/b_albedo.png" "Lambert 135,40" "$w/b_lit.png" "Blinn-Phong (grey)" "$w/b_blinn.png" normals "$w/b_normals.png" needles "$w/b_needles.png"
+q rgbn view "$w/b.exr" --view base --base-sigma 3 -o "$w/b_base.png"
+panel $out/views.jpg albedo "$w/b_albedo.png" "Lambert 135,40" "$w/b_lit.png" "Blinn-Phong (grey)" "$w/b_blinn.png" normals "$w/b_normals.png" "base normals (bilateral 3)" "$w/b_base.png" needles "$w/b_needles.png"
 
 # Conventions.
 q rgbn export "$w/b.exr" --convention gl -o "$w/gl.png"

@@ -42,7 +42,7 @@ TEST(RgbnCli, PhotoToRgbnEditLightExportRoundTrip) {
   r = run_proctex("rgbn light " + q(d / "edited.exr") + " --light 135,40 --model blinn -o " + q(d / "lit.png"), d);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::exists(d / "lit.png"));
-  for (const char* v : {"albedo", "normals", "needles", "mean", "gaussian", "segments"}) {
+  for (const char* v : {"albedo", "normals", "base", "needles", "mean", "gaussian", "segments"}) {
     r = run_proctex("rgbn view " + q(d / "edited.exr") + " --view " + v + " -o " + q(d / (std::string(v) + ".png")), d);
     EXPECT_EQ(r.exit_code, 0) << v << r.err;
   }
