@@ -156,7 +156,7 @@ struct SynthCliOptions {
   float normal_weight = 1.0f, coherence = 2.0f;
   std::vector<float> randomness;
   uint64_t seed = 1;
-  bool compose = false, json = false, no_cache = false;
+  bool compose = false, no_compose = false, json = false, no_cache = false;
 };
 
 fs::path synth_cache_dir() { return proctex::synth::default_cache_dir(); }
@@ -165,7 +165,11 @@ void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
   if (o.method != "jump" && o.method != "synth")
     throw UsageError("unknown synthesis method '" + o.method + "'", "use --method synth (Lefebvre-Hoppe) or jump (jump maps)");
   if (o.xi != -1 && !(o.xi >= 0 && o.xi < 90)) throw UsageError("--xi must be in [0, 90) degrees", "e.g. --xi 10");
-  if (o.fill.empty() && o.compose) throw UsageError("--compose applies to --fill", "drop --compose or give --fill");
+  if (o.fill.empty() && (o.compose || o.no_compose))
+    throw UsageError("--compose and --no-compose apply to --fill", "drop them or give --fill");
+  if (o.compose && o.no_compose) throw UsageError("--compose and --no-compose exclude each other", "give one");
+  // A fill composes the example's detail on the region's base normals unless told not to.
+  const bool compose = !o.fill.empty() && !o.no_compose;
   if (!o.fill.empty() && o.mask.empty())
     throw UsageError("--fill needs --mask (white = fill)", "e.g. --fill wall.exr --mask hole.png");
   const Rgbn ex = load_input(o.example);
@@ -176,7 +180,7 @@ void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
     mask = image_mask(load_image(o.mask), target.width, target.height);
   }
   const auto start = std::chrono::steady_clock::now();
-  json j = {{"output", o.output}, {"seed", o.seed}, {"method", o.method}, {"compose", o.compose}};
+  json j = {{"output", o.output}, {"seed", o.seed}, {"method", o.method}, {"compose", compose}};
   if (o.xi >= 0) j["xi"] = o.xi;
   Rgbn image;
   size_t visited = 0;
@@ -185,6 +189,7 @@ void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
     ExemplarSynthOptions so;
     so.seed = o.seed, so.normal_weight = o.normal_weight, so.randomness = o.randomness, so.passes = o.passes;
     so.coherence = o.coherence, so.compose = o.compose, so.xi = o.xi, so.windows = o.windows;
+    so.compose = compose;
     if (!o.no_cache) so.cache_dir = synth_cache_dir();
     Progress progress(o.fill.empty() ? "synthesising" : "trying windows", 100, g.quiet || o.json);
     so.progress = [&](double f) { progress.update(long(f * 100)); };
@@ -205,7 +210,7 @@ void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
     const JumpMap map = build_jump_map(ex, jo);
     const double analysis = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     JumpSynthOptions so;
-    so.order = parse_order(o.order), so.jump_probability = o.jump, so.seed = o.seed, so.compose = o.compose;
+    so.order = parse_order(o.order), so.jump_probability = o.jump, so.seed = o.seed, so.compose = compose;
     so.xi = o.xi;
     JumpSynthResult r = o.fill.empty() ? jump_synthesize(ex, map, o.width, o.height, so)
                                        : jump_fill(ex, map, target, mask, so);
@@ -281,15 +286,15 @@ void add_display_commands(CLI::App& rgbn, GlobalOptions& global) {
     auto o = std::make_shared<SynthCliOptions>();
     auto* cmd = rgbn.add_subcommand("synth", "Grow an RGBN or fill a region from an example (Lefebvre-Hoppe or jump maps)");
     cmd->footer("  proctex rgbn synth leather.exr --width 512 --height 512 -o big.exr\n"
-                "  proctex rgbn synth leather.exr --fill wall.exr --mask hole.png --compose -o patched.exr\n"
+                "  proctex rgbn synth leather.exr --fill wall.exr --mask hole.png -o patched.exr\n"
                 "  proctex rgbn synth leather.exr --method jump --order dfs --jump 0.05 --width 512 --height 512 -o big.exr\n"
                 "--method synth (default) runs proctex synth's synthesiser (Lefebvre-Hoppe, the same options) on the\n"
                 "albedo and the normals together (example 16..512 px a side); a fill tries --windows candidate windows\n"
                 "and keeps the one that best matches the pixels around the region. --method jump walks the output in\n"
                 "Hilbert or shuffled-DFS order continuing runs of the example (Zelinka-Garland, as Pereira & Velho).\n"
-                "Every synthesised pixel takes an example pixel's colour and normal together; --compose re-expresses\n"
+                "Every synthesised pixel takes an example pixel's colour and normal together; a fill re-expresses\n"
                 "the example's normals as detail on its smoothed normals and composes it on the target's smoothed\n"
-                "(base) normals. The same --seed gives the same result.");
+                "(base) normals (--no-compose: copy them). The same --seed gives the same result.");
     cmd->add_option("example", o->example, "Example RGBN (.exr)")->required();
     cmd->add_option("-o,--output", o->output, "Output RGBN (.exr)")->required();
     cmd->add_option("--method", o->method, "synth (Lefebvre-Hoppe, via synth/) or jump (jump maps)")->capture_default_str();
@@ -297,7 +302,8 @@ void add_display_commands(CLI::App& rgbn, GlobalOptions& global) {
     cmd->add_option("--height", o->height, "Output height (grow)")->capture_default_str()->check(CLI::Range(1, 16384));
     cmd->add_option("--fill", o->fill, "Fill a region of this RGBN instead of growing");
     cmd->add_option("--mask", o->mask, "Region to fill (white)");
-    cmd->add_flag("--compose", o->compose, "Compose the example's detail on the target's base normals");
+    cmd->add_flag("--compose", o->compose, "Fill: compose the example's detail on the target's base normals (the default)");
+    cmd->add_flag("--no-compose", o->no_compose, "Fill: copy the example's normals as they are");
     cmd->add_option("--xi", o->xi, "Keep synthesised normals at n_z >= sin(xi) (degrees)");
     cmd->add_option("--normal-weight", o->normal_weight, "synth: weight of the normals against the colour in matching")
         ->capture_default_str();
