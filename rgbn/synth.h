@@ -77,6 +77,8 @@ struct ExemplarSynthOptions {
   double xi = -1;                    // degrees; >= 0: keep n_z >= sin(xi)
   int windows = 16;                  // fill: candidate windows tried
   int ring = 4;                      // fill: width of the matching ring around the region (pixels)
+  bool tile_scoring = true;          // fill: score candidates on the ring's 64^2 tiles only when
+                                     // they cover at most half the window (same result, faster)
   std::filesystem::path cache_dir;   // synth/'s analysis cache; empty = no cache
   std::function<void(double)> progress;  // optional: fraction done, after each strip or window
 };

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 
 #include "core/error.h"
@@ -143,15 +144,60 @@ ExemplarSynthResult exemplar_fill(const Rgbn& ex, const Rgbn& target, const Mask
   synth::Synthesizer synthesizer(p->analysis);
   std::mt19937_64 rng(o.seed ^ 0x5eed5eedull);
   std::uniform_int_distribution<int64_t> offset(-(int64_t(1) << 24), int64_t(1) << 24);
-  double best = std::numeric_limits<double>::infinity();
-  std::vector<int32_t> best_coords;
-  for (int k = 0; k < o.windows; ++k) {
-    const int64_t ox = offset(rng), oy = offset(rng);
-    std::vector<int32_t> c = synthesizer.synthesise({ox, oy, ww, wh}, p->options);
-    double err = 0;
-    for (int q : ring) {
-      const int x = q % W - wx0, y = q / W - wy0;
-      const size_t i = size_t(y) * ww + x;
+  // Scoring a window needs only its ring pixels: synth/ is spatially deterministic (a window equals
+  // that region of any larger synthesis), so only rectangles of the 64^2 tiles that hold ring pixels
+  // are synthesised per candidate, when they cover at most half the window (large regions); the
+  // whole window is synthesised once, for the best offset.
+  constexpr int kTile = 64;
+  const int tx_n = (ww + kTile - 1) / kTile, ty_n = (wh + kTile - 1) / kTile;
+  std::vector<std::vector<size_t>> tile_ring(size_t(tx_n) * ty_n);  // indices into `ring`
+  for (size_t k = 0; k < ring.size(); ++k) {
+    const int x = ring[k] % W - wx0, y = ring[k] / W - wy0;
+    tile_ring[size_t(y / kTile) * tx_n + x / kTile].push_back(k);
+  }
+  // The ring's tiles merged into few rectangles (every synthesise() call costs a fixed number of
+  // kernel launches): runs of tiles along each band of rows, then runs with the same extent in
+  // consecutive bands joined (a rectangular region's ring becomes 4 strips).
+  struct TileRect {
+    int tx0, tx1, ty0, ty1;  // inclusive tile ranges
+  };
+  std::vector<TileRect> rects;
+  std::map<std::pair<int, int>, size_t> open;
+  for (int ty = 0; ty < ty_n; ++ty) {
+    std::map<std::pair<int, int>, size_t> next_open;
+    for (int tx = 0; tx < tx_n;) {
+      if (tile_ring[size_t(ty) * tx_n + tx].empty()) {
+        ++tx;
+        continue;
+      }
+      int end = tx;
+      while (end + 1 < tx_n && !tile_ring[size_t(ty) * tx_n + end + 1].empty()) ++end;
+      const auto key = std::make_pair(tx, end);
+      if (const auto it = open.find(key); it != open.end()) {
+        rects[it->second].ty1 = ty;
+        next_open[key] = it->second;
+      } else {
+        rects.push_back({tx, end, ty, ty});
+        next_open[key] = rects.size() - 1;
+      }
+      tx = end + 1;
+    }
+    open.swap(next_open);
+  }
+  size_t tiled_area = 0;
+  for (const TileRect& t : rects)
+    tiled_area += size_t(std::min(ww, (t.tx1 + 1) * kTile) - t.tx0 * kTile) *
+                  size_t(std::min(wh, (t.ty1 + 1) * kTile) - t.ty0 * kTile);
+  const bool by_tiles = o.tile_scoring && o.windows > 1 && 2 * tiled_area <= size_t(ww) * wh;
+  // Squared (albedo, normal) difference of each ring pixel ring[k] (k in ks) whose window
+  // coordinates are c[2 * i], c[2 * i + 1] with i = index(q), into e[k]; summed in ring order
+  // afterwards, so both ways of scoring give the same bits.
+  std::vector<double> e(ring.size());
+  auto score = [&](const std::vector<int32_t>& c, const std::vector<size_t>& ks, auto&& index) {
+    for (size_t k : ks) {
+      const int q = ring[k];
+      const size_t i = index(q);
+      double err = 0;
       const int s = c[2 * i + 1] * ex.width + c[2 * i];
       const Vec3 n = normal_of(s, size_t(q));
       for (int ch = 0; ch < 3; ++ch) {
@@ -159,11 +205,37 @@ ExemplarSynthResult exemplar_fill(const Rgbn& ex, const Rgbn& target, const Mask
         const double dn = n[ch] - target.normal[3 * size_t(q) + ch];
         err += da * da + dn * dn;
       }
+      e[k] = err;
     }
-    err /= std::max<size_t>(1, ring.size());
+  };
+  std::vector<size_t> all_ring(ring.size());
+  for (size_t k = 0; k < ring.size(); ++k) all_ring[k] = k;
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<int32_t> best_coords;
+  for (int k = 0; k < o.windows; ++k) {
+    const int64_t ox = offset(rng), oy = offset(rng);
+    double err = 0;
+    std::vector<int32_t> c;
+    if (by_tiles) {
+      for (const TileRect& t : rects) {
+        const int x0t = t.tx0 * kTile, y0t = t.ty0 * kTile;
+        const int tw = std::min(ww, (t.tx1 + 1) * kTile) - x0t, th = std::min(wh, (t.ty1 + 1) * kTile) - y0t;
+        const std::vector<int32_t> ct = synthesizer.synthesise({ox + x0t, oy + y0t, tw, th}, p->options);
+        for (int ty = t.ty0; ty <= t.ty1; ++ty)
+          for (int tx = t.tx0; tx <= t.tx1; ++tx)
+            score(ct, tile_ring[size_t(ty) * tx_n + tx],
+                  [&](int q) { return size_t(q / W - wy0 - y0t) * tw + size_t(q % W - wx0 - x0t); });
+      }
+    } else {
+      c = synthesizer.synthesise({ox, oy, ww, wh}, p->options);
+      score(c, all_ring, [&](int q) { return size_t(q / W - wy0) * ww + size_t(q % W - wx0); });
+    }
+    for (double v : e) err += v;
+    err /= double(std::max<size_t>(1, ring.size()));
     if (err < best) best = err, best_coords = std::move(c), r.window_x = ox, r.window_y = oy;
-    if (o.progress) o.progress(double(k + 1) / o.windows);
+    if (o.progress) o.progress(double(k + 1) / (o.windows + (by_tiles ? 1 : 0)));
   }
+  if (by_tiles) best_coords = synthesizer.synthesise({r.window_x, r.window_y, ww, wh}, p->options);
   r.ring_error = ring.empty() ? 0.0 : best;
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {

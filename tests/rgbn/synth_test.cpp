@@ -198,3 +198,22 @@ TEST(RgbnExemplarSynth, ExamplesOutsideSynthLimitsAreUsageErrors) {
   const Rgbn target(40, 40);
   EXPECT_THROW(exemplar_fill(cobbles(32, 32, 1), target, Mask(10, 1.0f), options(1)), proctex::Error);
 }
+
+TEST(RgbnExemplarSynth, LargeFillsScoredOnRingTilesGiveTheSameResult) {
+  // A 500^2 hole: its ring's 64^2 tiles cover under half the window, so candidates are scored on
+  // them alone (synth/ is spatially deterministic); the result must equal whole-window scoring.
+  const Rgbn ex = cobbles(64, 64, 21);
+  Rgbn target = from_height(rgbn_test::periodic_field(560, 560, 22, 8.0f), 1.0f, false);
+  const Mask mask = rect_mask(560, 560, 30, 30, 500, 500);
+  ExemplarSynthOptions o = options(13);
+  o.windows = 3;
+  const ExemplarSynthResult tiles = exemplar_fill(ex, target, mask, o);
+  o.tile_scoring = false;
+  const ExemplarSynthResult whole = exemplar_fill(ex, target, mask, o);
+  EXPECT_EQ(tiles.window_x, whole.window_x);
+  EXPECT_EQ(tiles.window_y, whole.window_y);
+  EXPECT_EQ(tiles.ring_error, whole.ring_error);
+  EXPECT_EQ(tiles.image.normal, whole.image.normal);
+  EXPECT_EQ(tiles.image.albedo, whole.image.albedo);
+  EXPECT_EQ(tiles.visited, size_t(500 * 500));
+}
