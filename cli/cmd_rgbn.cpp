@@ -200,6 +200,7 @@ struct ViewOptions {
   std::string view = "shaded";
   int spacing = 12;
   float range = 0;
+  float base_sigma = 3;
 };
 
 void run_view(const ViewOptions& o, const GlobalOptions&) {
@@ -212,6 +213,13 @@ void run_view(const ViewOptions& o, const GlobalOptions&) {
     out = shade(in, so);
   } else if (o.view == "albedo") out = view_albedo(in);
   else if (o.view == "normals") out = view_normals(in);
+  else if (o.view == "base") {
+    // The paper's base normals: the bilateral-smoothed copy that stamps and pens may compose on
+    // (edit op "base_sigma"), colour-coded like `normals`.
+    BilateralOptions bo;
+    bo.sigma_s = o.base_sigma, bo.sigma_n = 0.5f, bo.albedo = false;
+    out = view_normals(bilateral(in, bo));
+  }
   else if (o.view == "needles") out = view_needles(in, o.spacing);
   else if (o.view == "mean" || o.view == "gaussian") {
     const Curvature c = curvature(in);
@@ -220,7 +228,7 @@ void run_view(const ViewOptions& o, const GlobalOptions&) {
     out = view_labels(segment(in, {}).labels, in.width, in.height);
   } else {
     throw UsageError("unknown view '" + o.view + "'",
-                     "use shaded, shaded-normals, albedo, normals, needles, mean, gaussian or segments");
+                     "use shaded, shaded-normals, albedo, normals, base, needles, mean, gaussian or segments");
   }
   save_image(out, o.light.output);
 }
@@ -408,8 +416,10 @@ void add_rgbn_command(CLI::App& app, GlobalOptions& global) {
     cmd->add_option("rgbn", o->light.input, "Input RGBN (.exr)")->required();
     cmd->add_option("-o,--output", o->light.output, "Output image")->required();
     cmd->add_option("--view", o->view,
-                    "shaded, shaded-normals, albedo, normals (colour-coded), needles, mean, gaussian (curvature), segments")
+                    "shaded, shaded-normals, albedo, normals (colour-coded), base (smoothed normals), needles, mean, "
+                    "gaussian (curvature), segments")
         ->capture_default_str();
+    cmd->add_option("--base-sigma", o->base_sigma, "base: bilateral spatial sigma in pixels")->capture_default_str();
     cmd->add_option("--spacing", o->spacing, "Needle spacing in pixels")->capture_default_str();
     cmd->add_option("--range", o->range, "Curvature shown at full colour (default: 99th percentile)");
     add_light_flags(cmd, o->light);

@@ -12,6 +12,7 @@
 #include "rgbn/mip.h"
 #include "rgbn/synth.h"
 #include "rgbn/view.h"
+#include "synth/analysis.h"
 
 namespace proctex::cli::rgbn_cli {
 namespace {
@@ -81,7 +82,7 @@ struct MipCliOptions {
   std::vector<std::string> methods = {"naive", "toksvig", "vmf", "sh"};
   std::vector<int> footprints = {2, 4, 8, 16};
   std::vector<float> exponents = {8, 32, 128};
-  int lobes = 4, sh_order = 6;
+  int lobes = MipOptions{}.lobes, sh_order = 6;
   float shade_exponent = 64;
   bool json = false, errors = true;
 };
@@ -93,7 +94,7 @@ void run_mip(const MipCliOptions& o, const GlobalOptions& g) {
   fs::create_directories(o.output_dir);
   MipOptions mo;
   mo.lobes = o.lobes, mo.sh_order = o.sh_order;
-  if (o.lobes < 1 || o.lobes > 16) throw UsageError("--lobes must be in [1, 16]", "e.g. --lobes 4");
+  if (o.lobes < 1 || o.lobes > 16) throw UsageError("--lobes must be in [1, 16]", "e.g. --lobes 6");
   if (o.sh_order < 0 || o.sh_order > 16) throw UsageError("--sh-order must be in [0, 16]", "e.g. --sh-order 6");
   const Vec3 l = parse_light(o.light);
   Vec3 h = {l[0], l[1], l[2] + 1};
@@ -149,40 +150,83 @@ void run_mip(const MipCliOptions& o, const GlobalOptions& g) {
 }
 
 struct SynthCliOptions {
-  std::string example, output, fill, mask, order = "hilbert", preview;
-  int width = 256, height = 256, neighbourhood = 5;
-  double jump = 0.05;
+  std::string example, output, fill, mask, order = "hilbert", preview, method = "synth";
+  int width = 256, height = 256, neighbourhood = 5, windows = 16, passes = 2;
+  double jump = 0.05, xi = -1;
+  float normal_weight = 1.0f, coherence = 2.0f;
+  std::vector<float> randomness;
   uint64_t seed = 1;
-  bool compose = false, json = false;
+  bool compose = false, no_compose = false, json = false, no_cache = false;
 };
 
+fs::path synth_cache_dir() { return proctex::synth::default_cache_dir(); }
+
 void run_synth(const SynthCliOptions& o, const GlobalOptions& g) {
+  if (o.method != "jump" && o.method != "synth")
+    throw UsageError("unknown synthesis method '" + o.method + "'", "use --method synth (Lefebvre-Hoppe) or jump (jump maps)");
+  if (o.xi != -1 && !(o.xi >= 0 && o.xi < 90)) throw UsageError("--xi must be in [0, 90) degrees", "e.g. --xi 10");
+  if (o.fill.empty() && (o.compose || o.no_compose))
+    throw UsageError("--compose and --no-compose apply to --fill", "drop them or give --fill");
+  if (o.compose && o.no_compose) throw UsageError("--compose and --no-compose exclude each other", "give one");
+  // A fill composes the example's detail on the region's base normals unless told not to.
+  const bool compose = !o.fill.empty() && !o.no_compose;
+  if (!o.fill.empty() && o.mask.empty())
+    throw UsageError("--fill needs --mask (white = fill)", "e.g. --fill wall.exr --mask hole.png");
   const Rgbn ex = load_input(o.example);
-  const auto start = std::chrono::steady_clock::now();
-  JumpMapOptions jo;
-  jo.neighbourhood = o.neighbourhood, jo.seed = o.seed;
-  const JumpMap map = build_jump_map(ex, jo);
-  const double analysis = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  JumpSynthOptions so;
-  so.order = parse_order(o.order), so.jump_probability = o.jump, so.seed = o.seed, so.compose = o.compose;
-  JumpSynthResult r;
+  Rgbn target;
+  Mask mask;
   if (!o.fill.empty()) {
-    if (o.mask.empty()) throw UsageError("--fill needs --mask (white = fill)", "e.g. --fill wall.exr --mask hole.png");
-    const Rgbn target = load_input(o.fill);
-    r = jump_fill(ex, map, target, image_mask(load_image(o.mask), target.width, target.height), so);
-  } else {
-    if (o.compose) throw UsageError("--compose applies to --fill", "drop --compose or give --fill");
-    r = jump_synthesize(ex, map, o.width, o.height, so);
+    target = load_input(o.fill);
+    mask = image_mask(load_image(o.mask), target.width, target.height);
   }
-  save_output(r.image, o.output, o.preview);
+  const auto start = std::chrono::steady_clock::now();
+  json j = {{"output", o.output}, {"seed", o.seed}, {"method", o.method}, {"compose", compose}};
+  if (o.xi >= 0) j["xi"] = o.xi;
+  Rgbn image;
+  size_t visited = 0;
+  std::string detail;
+  if (o.method == "synth") {
+    ExemplarSynthOptions so;
+    so.seed = o.seed, so.normal_weight = o.normal_weight, so.randomness = o.randomness, so.passes = o.passes;
+    so.coherence = o.coherence, so.compose = o.compose, so.xi = o.xi, so.windows = o.windows;
+    so.compose = compose;
+    if (!o.no_cache) so.cache_dir = synth_cache_dir();
+    Progress progress(o.fill.empty() ? "synthesising" : "trying windows", 100, g.quiet || o.json);
+    so.progress = [&](double f) { progress.update(long(f * 100)); };
+    ExemplarSynthResult r = o.fill.empty() ? exemplar_synthesize(ex, o.width, o.height, so)
+                                           : exemplar_fill(ex, target, mask, so);
+    progress.finish();
+    image = std::move(r.image);
+    visited = r.visited;
+    j.update({{"normal_weight", o.normal_weight}, {"passes", o.passes}, {"coherence", o.coherence},
+              {"levels", r.levels}, {"example_tiles", r.example_tiles}, {"analysis_cached", r.analysis_cached},
+              {"analysis_seconds", r.analysis_seconds}, {"window", {r.window_x, r.window_y}}});
+    if (!o.randomness.empty()) j["randomness"] = o.randomness;
+    if (!o.fill.empty()) j.update({{"windows", o.windows}, {"ring_error", r.ring_error}});
+    detail = fmt::format("Lefebvre-Hoppe, window at ({}, {})", r.window_x, r.window_y);
+  } else {
+    JumpMapOptions jo;
+    jo.neighbourhood = o.neighbourhood, jo.seed = o.seed;
+    const JumpMap map = build_jump_map(ex, jo);
+    const double analysis = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    JumpSynthOptions so;
+    so.order = parse_order(o.order), so.jump_probability = o.jump, so.seed = o.seed, so.compose = compose;
+    so.xi = o.xi;
+    JumpSynthResult r = o.fill.empty() ? jump_synthesize(ex, map, o.width, o.height, so)
+                                       : jump_fill(ex, map, target, mask, so);
+    image = std::move(r.image);
+    visited = r.visited;
+    j.update({{"order", o.order}, {"jump_probability", o.jump}, {"mean_run", r.mean_run},
+              {"pca_dimensions", map.dimensions}, {"analysis_seconds", analysis}});
+    detail = fmt::format("jump maps, mean run {:.1f}", r.mean_run);
+  }
+  save_output(image, o.output, o.preview);
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const json j = {{"output", o.output}, {"width", r.image.width}, {"height", r.image.height}, {"seed", o.seed},
-                  {"order", o.order}, {"jump_probability", o.jump}, {"mean_run", r.mean_run}, {"pixels", r.visited},
-                  {"pca_dimensions", map.dimensions}, {"analysis_seconds", analysis}, {"seconds", total}};
+  j.update({{"width", image.width}, {"height", image.height}, {"pixels", visited}, {"seconds", total}});
   if (o.json) print_json(j);
   else if (!g.quiet)
-    std::printf("%s: %dx%d, %zu pixels synthesised (seed %llu, mean run %.1f) in %s\n", o.output.c_str(), r.image.width,
-                r.image.height, r.visited, (unsigned long long)o.seed, r.mean_run, format_seconds(total).c_str());
+    std::printf("%s: %dx%d, %zu pixels synthesised (%s, seed %llu) in %s\n", o.output.c_str(), image.width,
+                image.height, visited, detail.c_str(), (unsigned long long)o.seed, format_seconds(total).c_str());
 }
 
 void lit_flags(CLI::App* cmd, LitOptions& o) {
@@ -240,22 +284,39 @@ void add_display_commands(CLI::App& rgbn, GlobalOptions& global) {
   }
   {
     auto o = std::make_shared<SynthCliOptions>();
-    auto* cmd = rgbn.add_subcommand("synth", "Grow an RGBN or fill a region with jump maps (Zelinka-Garland)");
+    auto* cmd = rgbn.add_subcommand("synth", "Grow an RGBN or fill a region from an example (Lefebvre-Hoppe or jump maps)");
     cmd->footer("  proctex rgbn synth leather.exr --width 512 --height 512 -o big.exr\n"
-                "  proctex rgbn synth leather.exr --fill wall.exr --mask hole.png --order dfs --compose -o patched.exr\n"
-                "Every synthesised pixel is a copy of an example pixel; --compose re-expresses the example's normals as\n"
-                "detail on the target's smoothed (base) normals. The same --seed gives the same result.");
+                "  proctex rgbn synth leather.exr --fill wall.exr --mask hole.png -o patched.exr\n"
+                "  proctex rgbn synth leather.exr --method jump --order dfs --jump 0.05 --width 512 --height 512 -o big.exr\n"
+                "--method synth (default) runs proctex synth's synthesiser (Lefebvre-Hoppe, the same options) on the\n"
+                "albedo and the normals together (example 16..512 px a side); a fill tries --windows candidate windows\n"
+                "and keeps the one that best matches the pixels around the region. --method jump walks the output in\n"
+                "Hilbert or shuffled-DFS order continuing runs of the example (Zelinka-Garland, as Pereira & Velho).\n"
+                "Every synthesised pixel takes an example pixel's colour and normal together; a fill re-expresses\n"
+                "the example's normals as detail on its smoothed normals and composes it on the target's smoothed\n"
+                "(base) normals (--no-compose: copy them). The same --seed gives the same result.");
     cmd->add_option("example", o->example, "Example RGBN (.exr)")->required();
     cmd->add_option("-o,--output", o->output, "Output RGBN (.exr)")->required();
+    cmd->add_option("--method", o->method, "synth (Lefebvre-Hoppe, via synth/) or jump (jump maps)")->capture_default_str();
     cmd->add_option("--width", o->width, "Output width (grow)")->capture_default_str()->check(CLI::Range(1, 16384));
     cmd->add_option("--height", o->height, "Output height (grow)")->capture_default_str()->check(CLI::Range(1, 16384));
     cmd->add_option("--fill", o->fill, "Fill a region of this RGBN instead of growing");
     cmd->add_option("--mask", o->mask, "Region to fill (white)");
-    cmd->add_flag("--compose", o->compose, "Compose the example's detail on the target's base normals");
-    cmd->add_option("--order", o->order, "hilbert or dfs (shuffled depth-first, for arbitrary regions)")->capture_default_str();
-    cmd->add_option("--jump", o->jump, "Jump probability per pixel (mean run ~ 1/p)")->capture_default_str();
-    cmd->add_option("--neighbourhood", o->neighbourhood, "Analysis neighbourhood M (odd)")->capture_default_str();
-    cmd->add_option("--seed", o->seed, "Seed")->capture_default_str();
+    cmd->add_flag("--compose", o->compose, "Fill: compose the example's detail on the target's base normals (the default)");
+    cmd->add_flag("--no-compose", o->no_compose, "Fill: copy the example's normals as they are");
+    cmd->add_option("--xi", o->xi, "Keep synthesised normals at n_z >= sin(xi) (degrees)");
+    cmd->add_option("--normal-weight", o->normal_weight, "synth: weight of the normals against the colour in matching")
+        ->capture_default_str();
+    cmd->add_option("--randomness", o->randomness, "synth: jitter per level, coarse to fine (default: proctex synth's)")
+        ->delimiter(',');
+    cmd->add_option("--passes", o->passes, "synth: correction passes per level")->capture_default_str();
+    cmd->add_option("--coherence", o->coherence, "synth: preference for growing patches")->capture_default_str();
+    cmd->add_option("--windows", o->windows, "synth --fill: candidate windows tried")->capture_default_str();
+    cmd->add_flag("--no-cache", o->no_cache, "synth: do not read or write the analysis cache");
+    cmd->add_option("--order", o->order, "jump: hilbert or dfs (shuffled depth-first, for arbitrary regions)")->capture_default_str();
+    cmd->add_option("--jump", o->jump, "jump: jump probability per pixel (mean run ~ 1/p)")->capture_default_str();
+    cmd->add_option("--neighbourhood", o->neighbourhood, "jump: analysis neighbourhood M (odd)")->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Seed (synth uses its low 32 bits)")->capture_default_str();
     cmd->add_option("--preview", o->preview, "Also write a shaded preview image");
     cmd->add_flag("--json", o->json, "Print a JSON report");
     cmd->callback([o, &global] { run_synth(*o, global); });

@@ -76,6 +76,7 @@ struct OneOpOptions {
   float width = 6, depth = 2;
   std::string profile = "groove";
   float xi = -90;
+  float base_sigma = 0;
 };
 
 void run_one(const std::string& kind, OneOpOptions& o, const GlobalOptions& g) {
@@ -95,6 +96,7 @@ void run_one(const std::string& kind, OneOpOptions& o, const GlobalOptions& g) {
     op["points"] = pts, op["width"] = o.width, op["depth"] = o.depth, op["profile"] = o.profile;
   }
   if (o.xi > -90) op["xi"] = o.xi;
+  if (o.base_sigma != 0) op["base_sigma"] = o.base_sigma;
   Rgbn im = load_input(o.input);
   const EditReport r = apply_edit(im, op);
   save_output(im, o.output, o.preview);
@@ -157,6 +159,9 @@ void add_edit_commands(CLI::App& rgbn, GlobalOptions& global) {
     cmd->add_option("--scale", o->scale, "Size factor")->capture_default_str();
     cmd->add_option("--strength", o->strength, "Slope factor (0 = no relief, 2 = twice as deep)")->capture_default_str();
     cmd->add_option("--xi", o->xi, "Saturation bound in degrees (n_z >= sin(xi))");
+    cmd->add_option("--base-sigma", o->base_sigma,
+                    "Compose on bilateral-smoothed base normals (sigma in pixels; 0 = the current normals)")
+        ->capture_default_str();
     cmd->add_option("--append", o->append, "Append the operation to this session file");
     cmd->add_option("--preview", o->preview, "Also write a shaded preview image");
     cmd->add_flag("--json", o->json_out, "Print a JSON report");
@@ -173,6 +178,9 @@ void add_edit_commands(CLI::App& rgbn, GlobalOptions& global) {
     cmd->add_option("--depth", o->depth, "Profile depth (pixels of height)")->capture_default_str();
     cmd->add_option("--profile", o->profile, "groove, ridge or vee (crease on the medial axis)")->capture_default_str();
     cmd->add_option("--xi", o->xi, "Saturation bound in degrees (n_z >= sin(xi))");
+    cmd->add_option("--base-sigma", o->base_sigma,
+                    "Compose on bilateral-smoothed base normals (sigma in pixels; 0 = the current normals)")
+        ->capture_default_str();
     cmd->add_option("--append", o->append, "Append the operation to this session file");
     cmd->add_option("--preview", o->preview, "Also write a shaded preview image");
     cmd->add_flag("--json", o->json_out, "Print a JSON report");

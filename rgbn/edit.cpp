@@ -243,6 +243,41 @@ Region parse_region(const json& op, const Rgbn& im, const fs::path& base_dir) {
 }
 
 // Keeps n_z >= sin(xi) along the arc from the old normal to the new one.
+// Base normals of a footprint for stamps and pens ("base_sigma" > 0): a bilateral-smoothed copy
+// of the normals (Pereira & Velho's base), computed on the footprint grown by the filter's reach,
+// so that a stamp replaces the detail under it instead of riding on it.
+struct BaseField {
+  Rect r;
+  Rgbn im;
+  bool on = false;
+  Vec3 at(const Rgbn& src, int x, int y) const {
+    return on ? Vec3{im.n(x - r.x, y - r.y)[0], im.n(x - r.x, y - r.y)[1], im.n(x - r.x, y - r.y)[2]}
+              : Vec3{src.n(x, y)[0], src.n(x, y)[1], src.n(x, y)[2]};
+  }
+};
+BaseField base_field(const Rgbn& im, const json& op, Rect foot) {
+  BaseField b;
+  const double sigma = num(op, "base_sigma", 0);
+  if (sigma == 0) return b;
+  if (!(sigma > 0 && sigma <= 32)) throw UsageError("base_sigma must be in (0, 32] pixels (0 = the current normals)", "e.g. \"base_sigma\":3");
+  b.on = true;
+  b.r = clip(grow(foot, int(std::ceil(2 * sigma)) + 1), im.width, im.height);
+  Rgbn crop(std::max(1, b.r.w), std::max(1, b.r.h));
+  for (int y = 0; y < b.r.h; ++y)
+    for (int x = 0; x < b.r.w; ++x) {
+      std::copy_n(im.n(b.r.x + x, b.r.y + y), 3, crop.n(x, y));
+      std::copy_n(im.a(b.r.x + x, b.r.y + y), 3, crop.a(x, y));
+    }
+  const double sigma_n = num(op, "base_sigma_n", 0.5);
+  if (!(sigma_n > 0 && sigma_n <= 10)) throw UsageError("base_sigma_n must be in (0, 10]", "e.g. \"base_sigma_n\":0.5");
+  BilateralOptions bo;  // a wide normal range: fine detail is smoothed, strong creases survive
+  bo.sigma_s = float(sigma);
+  bo.sigma_n = float(sigma_n);
+  bo.albedo = false;
+  b.im = bilateral(crop, bo);
+  return b;
+}
+
 inline Vec3 bound(const Vec3& before, const Vec3& after, double xi) {
   if (xi <= -90) return after;
   return saturate_on_arc(before, after, xi);
@@ -353,6 +388,7 @@ EditReport apply_edit(Rgbn& im, const json& op, const fs::path& base_dir) {
     const double half = 0.5 * std::hypot(s.width, s.height) * scale;
     begin(Rect{int(std::floor(at[0] - half)), int(std::floor(at[1] - half)), int(std::ceil(2 * half)) + 2,
                int(std::ceil(2 * half)) + 2});
+    const BaseField base = base_field(im, op, foot);
     const double ca = std::cos(angle), sa = std::sin(angle);
     const Vec3 o = {float(ca), float(sa), 0.0f};  // the stamp's +x axis in the image (y up)
     const double scx = 0.5 * (s.width - 1), scy = 0.5 * (s.height - 1);
@@ -366,11 +402,11 @@ EditReport apply_edit(Rgbn& im, const json& op, const fs::path& base_dir) {
         Vec3 t, a;
         bilinear(s, px, py, t, a);
         if (strength != 1.0) t = normalized({float(t[0] * strength), float(t[1] * strength), t[2]});
-        const Vec3 n0 = load(im.n(x, y));
+        const Vec3 n0 = load(im.n(x, y)), b = base.at(im, x, y);
         Vec3 u, v;
-        local_frame(n0, o, u, v);
-        Vec3 n1 = normalized({t[0] * u[0] + t[1] * v[0] + t[2] * n0[0], t[0] * u[1] + t[1] * v[1] + t[2] * n0[1],
-                              t[0] * u[2] + t[1] * v[2] + t[2] * n0[2]});
+        local_frame(b, o, u, v);
+        Vec3 n1 = normalized({t[0] * u[0] + t[1] * v[0] + t[2] * b[0], t[0] * u[1] + t[1] * v[1] + t[2] * b[1],
+                              t[0] * u[2] + t[1] * v[2] + t[2] * b[2]});
         n1 = bound(n0, n1, xi);
         store(im.n(x, y), n1);
         float* alb = im.a(x, y);
@@ -396,6 +432,7 @@ EditReport apply_edit(Rgbn& im, const json& op, const fs::path& base_dir) {
     for (const auto& p : pts) x0 = std::min(x0, p[0]), y0 = std::min(y0, p[1]), x1 = std::max(x1, p[0]), y1 = std::max(y1, p[1]);
     begin(Rect{int(std::floor(x0 - width)) - 1, int(std::floor(y0 - width)) - 1, int(std::ceil(x1 - x0 + 2 * width)) + 3,
                int(std::ceil(y1 - y0 + 2 * width)) + 3});
+    const BaseField base = base_field(im, op, foot);
     for (int y = foot.y; y < foot.y + foot.h; ++y)
       for (int x = foot.x; x < foot.x + foot.w; ++x) {
         double best = 1e30, nx = 0, ny = 0;
@@ -418,11 +455,11 @@ EditReport apply_edit(Rgbn& im, const json& op, const fs::path& base_dir) {
           const double gx = dh * (x - nx) / s, gy = dh * (ny - y) / s;  // height gradient, y up
           t = normalized({float(-gx), float(-gy), 1.0f});
         }
-        const Vec3 n0 = load(im.n(x, y));
+        const Vec3 n0 = load(im.n(x, y)), b = base.at(im, x, y);
         Vec3 e1, e2;
-        local_frame(n0, x_axis, e1, e2);
-        Vec3 n1 = normalized({t[0] * e1[0] + t[1] * e2[0] + t[2] * n0[0], t[0] * e1[1] + t[1] * e2[1] + t[2] * n0[1],
-                              t[0] * e1[2] + t[1] * e2[2] + t[2] * n0[2]});
+        local_frame(b, x_axis, e1, e2);
+        Vec3 n1 = normalized({t[0] * e1[0] + t[1] * e2[0] + t[2] * b[0], t[0] * e1[1] + t[1] * e2[1] + t[2] * b[1],
+                              t[0] * e1[2] + t[1] * e2[2] + t[2] * b[2]});
         store(im.n(x, y), bound(n0, n1, xi));
         ++rep.pixels_changed;
       }

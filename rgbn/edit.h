@@ -12,7 +12,10 @@
 //   {"op":"stamp", "at":[x,y], "shape":"dome"|"dimple"|"ring", "radius":16, "height":6,
 //    "angle":0, "strength":1, "file":"stamp.exr", "albedo":"keep"|"replace"|"multiply", "xi":..}
 //       a small RGBN (a file, band-passed by "detail":[s1,s2] if given, or a built-in shape)
-//       applied in the local frame of the base normals at each target pixel.
+//       applied in the local frame of the base normals at each target pixel: the current normals,
+//       or with "base_sigma":S > 0 a bilateral-smoothed copy (sigma_s = S, normal range
+//       "base_sigma_n", default 0.5: detail is smoothed, strong creases survive), so that the stamp
+//       replaces the detail under it (Pereira & Velho's base normals). Pens take "base_sigma" too.
 //   {"op":"pen", "points":[[x,y],...], "width":6, "depth":2, "profile":"groove"|"ridge"|"vee", "xi":..}
 //       a height profile h(s) across a polyline (s = distance to the path); "vee" has a crease
 //       on the medial axis.

@@ -55,6 +55,11 @@ inline float fast_exp(float x) {
 
 // One tap (i, j) of the bilateral filter for a row of n output pixels: planar source rows s[6],
 // centre rows c[6]; accumulates the weight and the weighted channels into acc (7 rows of n).
+// On x86-64 an AVX2 clone is chosen at load time where the CPU has it (8 lanes instead of SSE2's
+// 4; no FMA, so both clones give the same bits).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
 void bilateral_taps(const float* const* s, const float* const* c, float k, float ic, float in, int n, float* acc) {
   const float* __restrict s0 = s[0];
   const float* __restrict s1 = s[1];
@@ -244,6 +249,9 @@ Rgbn bilateral(const Rgbn& image, const BilateralOptions& o, const Mask* mask) {
   if (!(o.sigma_s > 0 && o.sigma_s < 100) || !(o.sigma_c > 0) || !(o.sigma_n > 0))
     throw UsageError("bilateral widths must be positive (sigma_s < 100)", "e.g. --sigma 2 --sigma-c 0.1 --sigma-n 0.2");
   const int w = image.width, h = image.height;
+  // Taps on the disc of radius r = ceil(2 sigma_s) (spatial weight >= exp(-2) at its rim when
+  // sigma_s is a whole number); the square's corners beyond it weigh less and would cost 65% more
+  // taps at sigma_s = 2 (81 instead of 49).
   const int r = std::max(1, int(std::ceil(2.0f * o.sigma_s)));
   const int W = w + 2 * r, H = h + 2 * r;
   // Six planar channels (albedo, normal) padded by r clamped pixels: the tap loop then runs over
@@ -272,6 +280,7 @@ Rgbn bilateral(const Rgbn& image, const BilateralOptions& o, const Mask* mask) {
       for (int c = 0; c < 6; ++c) c0[c] = plane(c) + size_t(y + r) * W + r;
       for (int j = -r; j <= r; ++j)
         for (int i = -r; i <= r; ++i) {
+          if (i * i + j * j > r * r) continue;
           const float k = std::exp(-0.5f * float(i * i + j * j) / (o.sigma_s * o.sigma_s));
           const float* s[6];
           for (int c = 0; c < 6; ++c) s[c] = plane(c) + size_t(y + r + j) * W + r + i;

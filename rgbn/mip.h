@@ -40,7 +40,8 @@ struct MipLevel {
 };
 
 struct MipOptions {
-  int lobes = 4;       // vMF lobes per texel (at most the number of fine normals)
+  int lobes = 6;       // vMF lobes per texel (at most the number of fine normals); 4 was too few
+                       // for footprints of 6 modes or smooth steep bumps (docs/rgbn.md)
   int iterations = 12; // spherical EM iterations
   int sh_order = 6;
 };

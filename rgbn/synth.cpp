@@ -237,6 +237,8 @@ JumpSynthResult run(const Rgbn& ex, const JumpMap& map, Rgbn out, const std::vec
   return res;
 }
 
+}  // namespace
+
 Rgbn base_normals(const Rgbn& im, float sigma) {
   FilterOptions f;
   f.kind = FilterKind::Smooth;
@@ -244,11 +246,27 @@ Rgbn base_normals(const Rgbn& im, float sigma) {
   return filter(im, f);
 }
 
-}  // namespace
+Vec3 compose_detail(const Rgbn& ex, const Rgbn& eb, int s, const Vec3& B) {
+  const Vec3 x_axis = {1, 0, 0};
+  const float* n = &ex.normal[3 * size_t(s)];
+  const Vec3 b = {eb.normal[3 * size_t(s)], eb.normal[3 * size_t(s) + 1], eb.normal[3 * size_t(s) + 2]};
+  Vec3 u, v;
+  local_frame(b, x_axis, u, v);
+  const float t[3] = {n[0] * u[0] + n[1] * u[1] + n[2] * u[2], n[0] * v[0] + n[1] * v[1] + n[2] * v[2],
+                      n[0] * b[0] + n[1] * b[1] + n[2] * b[2]};
+  local_frame(B, x_axis, u, v);
+  Vec3 o;
+  for (int c = 0; c < 3; ++c) o[c] = t[0] * u[c] + t[1] * v[c] + t[2] * B[c];
+  const float l = std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+  for (int c = 0; c < 3; ++c) o[c] /= l;
+  return o;
+}
 
 JumpSynthResult jump_synthesize(const Rgbn& ex, const JumpMap& map, int w, int h, const JumpSynthOptions& o) {
   check_dimensions(w, h);
-  return run(ex, map, Rgbn(w, h), std::vector<char>(size_t(w) * h, 1), o);
+  JumpSynthResult r = run(ex, map, Rgbn(w, h), std::vector<char>(size_t(w) * h, 1), o);
+  if (o.xi >= 0) detail::saturate_synthesised(r.image, Rgbn(w, h), r.source, o.xi);
+  return r;
 }
 
 JumpSynthResult jump_fill(const Rgbn& ex, const JumpMap& map, const Rgbn& target, const Mask& mask,
@@ -260,25 +278,28 @@ JumpSynthResult jump_fill(const Rgbn& ex, const JumpMap& map, const Rgbn& target
   if (o.compose) {
     // Detail of the example relative to its base, composed on the target's base normals.
     const Rgbn eb = base_normals(ex, o.base_sigma), tb = base_normals(target, o.base_sigma);
-    const Vec3 x_axis = {1, 0, 0};
     for (size_t p = 0; p < target.size(); ++p) {
       const int s = r.source[p];
       if (s < 0) continue;
-      const float* n = &ex.normal[3 * size_t(s)];
-      const Vec3 b = {eb.normal[3 * size_t(s)], eb.normal[3 * size_t(s) + 1], eb.normal[3 * size_t(s) + 2]};
-      Vec3 u, v;
-      local_frame(b, x_axis, u, v);
-      const float t[3] = {n[0] * u[0] + n[1] * u[1] + n[2] * u[2], n[0] * v[0] + n[1] * v[1] + n[2] * v[2],
-                          n[0] * b[0] + n[1] * b[1] + n[2] * b[2]};
-      const Vec3 B = {tb.normal[3 * p], tb.normal[3 * p + 1], tb.normal[3 * p + 2]};
-      local_frame(B, x_axis, u, v);
-      float* o3 = &r.image.normal[3 * p];
-      for (int c = 0; c < 3; ++c) o3[c] = t[0] * u[c] + t[1] * v[c] + t[2] * B[c];
-      const float l = std::sqrt(o3[0] * o3[0] + o3[1] * o3[1] + o3[2] * o3[2]);
-      for (int c = 0; c < 3; ++c) o3[c] /= l;
+      const Vec3 n = compose_detail(ex, eb, s, {tb.normal[3 * p], tb.normal[3 * p + 1], tb.normal[3 * p + 2]});
+      std::copy(n.begin(), n.end(), &r.image.normal[3 * p]);
     }
   }
+  if (o.xi >= 0) detail::saturate_synthesised(r.image, target, r.source, o.xi);
   return r;
 }
+
+namespace detail {
+void saturate_synthesised(Rgbn& out, const Rgbn& before, const std::vector<int>& source, double xi) {
+  if (!(xi >= 0 && xi < 90)) throw UsageError("--xi must be in [0, 90) degrees", "e.g. --xi 10");
+  for (size_t p = 0; p < out.size(); ++p) {
+    if (source[p] < 0) continue;
+    const Vec3 a = {before.normal[3 * p], before.normal[3 * p + 1], before.normal[3 * p + 2]};
+    const Vec3 b = {out.normal[3 * p], out.normal[3 * p + 1], out.normal[3 * p + 2]};
+    const Vec3 k = saturate_on_arc(a, b, xi);
+    std::copy(k.begin(), k.end(), &out.normal[3 * p]);
+  }
+}
+}  // namespace detail
 
 }  // namespace proctex::rgbn

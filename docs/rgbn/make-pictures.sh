@@ -27,7 +27,8 @@ q rgbn light "$w/b.exr" --light $L --model blinn --grey --exponent 24 --specular
 q rgbn view "$w/b.exr" --view albedo -o "$w/b_albedo.png"
 q rgbn view "$w/b.exr" --view normals -o "$w/b_normals.png"
 q rgbn view "$w/b.exr" --view needles --spacing 12 -o "$w/b_needles.png"
-panel $out/views.jpg albedo "$w/b_albedo.png" "Lambert 135,40" "$w/b_lit.png" "Blinn-Phong (grey)" "$w/b_blinn.png" normals "$w/b_normals.png" needles "$w/b_needles.png"
+q rgbn view "$w/b.exr" --view base --base-sigma 3 -o "$w/b_base.png"
+panel $out/views.jpg albedo "$w/b_albedo.png" "Lambert 135,40" "$w/b_lit.png" "Blinn-Phong (grey)" "$w/b_blinn.png" normals "$w/b_normals.png" "base normals (bilateral 3)" "$w/b_base.png" needles "$w/b_needles.png"
 
 # Conventions.
 q rgbn export "$w/b.exr" --convention gl -o "$w/gl.png"
@@ -103,18 +104,25 @@ q rgbn import --height "$w/brick2.png" --scale 12 -o "$w/m.exr"
 q rgbn mip "$w/m.exr" -o "$w/mip" --footprints 8 --exponents 32 --shade-exponent 32 --light 120,55
 panel $out/mip.jpg "truth (8x8 supersampled)" "$w/mip/truth_f8_spec.png" naive "$w/mip/naive_f8_spec.png" Toksvig "$w/mip/toksvig_f8_spec.png" "vMF, 4 lobes" "$w/mip/vmf_f8_spec.png" "SH order 6" "$w/mip/sh_f8_spec.png"
 
-# Jump-map synthesis: grow gravel from a 128^2 example, fill a hole in a gravel RGBN.
+# Synthesis: grow gravel from a 128^2 example (synth/'s Lefebvre-Hoppe, the default, and jump
+# maps), fill a hole in another gravel RGBN; everything shaded under the same light.
 oiiotool $T/gravel.png --cut 128x128+0+0 -o "$w/gravel.png"
 q rgbn import --height "$w/gravel.png" --scale 4 --albedo "$w/gravel.png" -o "$w/g.exr"
-q rgbn synth "$w/g.exr" --width 384 --height 384 --seed 5 -o "$w/g_big.exr"
+q rgbn synth "$w/g.exr" --width 384 --height 384 --seed 5 --no-cache -o "$w/g_big.exr"
+q rgbn synth "$w/g.exr" --method jump --width 384 --height 384 --seed 5 -o "$w/g_big_j.exr"
 q rgbn light "$w/g.exr" --light $L -o "$w/g_lit.png"
-q rgbn light "$w/g_big.exr" --light $L -o "$w/g_big_lit.png"
-oiiotool "$w/g_big_lit.png" --cut 128x128+128+128 -o "$w/g_big_crop.png"
+for f in g_big g_big_j; do
+  q rgbn light "$w/$f.exr" --light $L -o "$w/${f}_lit.png"
+  oiiotool "$w/${f}_lit.png" --cut 128x128+128+128 -o "$w/${f}_crop.png"
+done
+oiiotool "$w/g_big_lit.png" --resize 128x128 -o "$w/g_big_whole.png"
+panel $out/synth.jpg "gravel example 128^2" "$w/g_lit.png" "synth 384^2 (128^2 crop)" "$w/g_big_crop.png" "jump maps (same crop)" "$w/g_big_j_crop.png" "synth 384^2, whole" "$w/g_big_lit.png"
 oiiotool $T/gravel.png --cut 256x256+256+256 -o "$w/gravel2.png"
 q rgbn import --height "$w/gravel2.png" --scale 4 --albedo "$w/gravel2.png" -o "$w/g2.exr"
 oiiotool --create 256x256 3 --fill:color=1,1,1 64,64,192,192 -o "$w/hole.png"
-q rgbn synth "$w/g.exr" --fill "$w/g2.exr" --mask "$w/hole.png" --order hilbert --compose --seed 2 -o "$w/filled.exr"
-q rgbn light "$w/g2.exr" --light $L -o "$w/g2_lit.png"
-q rgbn light "$w/filled.exr" --light $L -o "$w/filled_lit.png"
-panel $out/synth.jpg "gravel example 128^2" "$w/g_lit.png" "synth 384^2 (128^2 crop)" "$w/g_big_crop.png" "gravel 256^2" "$w/g2_lit.png" "centre 128^2 refilled" "$w/filled_lit.png"
+q rgbn synth "$w/g.exr" --fill "$w/g2.exr" --mask "$w/hole.png" --compose --seed 2 -o "$w/filled.exr"
+q rgbn synth "$w/g.exr" --method jump --fill "$w/g2.exr" --mask "$w/hole.png" --order hilbert --compose --seed 2 -o "$w/filled_j.exr"
+for f in g2 filled filled_j; do q rgbn light "$w/$f.exr" --light $L -o "$w/${f}_lit.png"; done
+q rgbn light "$w/filled.exr" --light 300,35 -o "$w/filled_lit2.png"
+panel $out/synth-fill.jpg "gravel 256^2 (before)" "$w/g2_lit.png" "centre refilled: synth" "$w/filled_lit.png" "jump maps" "$w/filled_j_lit.png" "synth, light 300,35" "$w/filled_lit2.png"
 echo "pictures in $out"

@@ -1,6 +1,8 @@
 // Rotations on the sphere, stamps, pens and edit sessions.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "core/error.h"
 #include "rgbn/edit.h"
 #include "support.h"
@@ -102,6 +104,54 @@ TEST(RgbnStamp, SameStampLooksDifferentOnDifferentBaseNormals) {
   EXPECT_LT(angle_deg(tilted.n(37, 32), rotated.data()), 0.5);
 }
 
+TEST(RgbnStamp, OnSmoothedBaseNormalsAStampReplacesTheDetailUnderIt) {
+  // A gentle tilt plus fine noise (the "detail" a user wants a stamp to replace).
+  const int w = 96, h = 80;
+  HeightField z{w, h, std::vector<float>(size_t(w) * h)};
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) z.at(x, y) = 0.3f * x + 0.6f * u(rng);
+  const Rgbn base = from_height(z, 1.0f, false);
+  auto roughness = [](const Rgbn& im, int cx, int cy, int r) {  // mean angle between horizontal neighbours
+    double sum = 0;
+    int n = 0;
+    for (int y = cy - r; y <= cy + r; ++y)
+      for (int x = cx - r; x < cx + r; ++x) sum += angle_deg(im.n(x, y), im.n(x + 1, y)), ++n;
+    return sum / n;
+  };
+  // A flat stamp on the current normals changes nothing; on the smoothed base it removes the noise
+  // and keeps the tilt.
+  Rgbn out = base;
+  apply_edit(out, json{{"op", "stamp"}, {"at", {48, 40}}, {"shape", "dome"}, {"radius", 12}, {"height", 0}, {"base_sigma", 3}});
+  EXPECT_LT(roughness(out, 48, 40, 6), 0.3 * roughness(base, 48, 40, 6));
+  const float* n = out.n(48, 40);
+  const float tilt[3] = {-0.3f / std::sqrt(1.09f), 0.0f, 1.0f / std::sqrt(1.09f)};
+  EXPECT_LT(angle_deg(n, tilt), 4.0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (std::hypot(x - 48.0, y - 40.0) > 12 * std::sqrt(2.0) + 3) {
+        ASSERT_TRUE(std::equal(base.n(x, y), base.n(x, y) + 3, out.n(x, y))) << x << "," << y;
+      }
+  EXPECT_LT(max_norm_error(out), 1e-5);
+  // A pen on the smoothed base: along the groove the noise is gone; on the current normals it
+  // shows through.
+  Rgbn pen = base, pen_raw = base;
+  const json p = {{"op", "pen"}, {"points", {{10, 40}, {86, 40}}}, {"width", 6}, {"depth", 2}, {"profile", "groove"}};
+  json pb = p;
+  pb["base_sigma"] = 3;
+  apply_edit(pen, pb);
+  apply_edit(pen_raw, p);
+  // Along the groove's wall (3 px below the line) the relief is the profile on a smooth base.
+  auto wall = [](const Rgbn& im) {
+    double sum = 0;
+    for (int x = 20; x < 76; ++x) sum += angle_deg(im.n(x, 43), im.n(x + 1, 43));
+    return sum / 56;
+  };
+  EXPECT_LT(wall(pen), 0.3 * wall(pen_raw));
+  EXPECT_THROW(apply_edit(out, json{{"op", "stamp"}, {"at", {48, 40}}, {"base_sigma", -1}}), proctex::UsageError);
+}
+
 TEST(RgbnPen, GrooveOnFlatBaseFollowsTheProfileAndStaysInside) {
   Rgbn im(80, 60);
   const double width = 6, depth = 2;
@@ -132,6 +182,7 @@ TEST(RgbnEdit, SaturationBoundHoldsAfterEveryEditAndSessionsReplay) {
   const json session = json::array({
       {{"op", "rotate"}, {"target", {1, 0, 0.05}}, {"amount", 0.9}, {"mode", "blend"}, {"region", {{"disc", {40, 40, 30}}}}, {"xi", xi}},
       {{"op", "stamp"}, {"at", {60, 50}}, {"shape", "dimple"}, {"radius", 14}, {"height", 30}, {"xi", xi}},
+      {{"op", "stamp"}, {"at", {30, 60}}, {"shape", "dome"}, {"radius", 10}, {"height", 25}, {"base_sigma", 3}, {"xi", xi}},
       {{"op", "pen"}, {"points", {{5, 80}, {90, 70}}}, {"width", 5}, {"depth", 8}, {"profile", "vee"}, {"xi", xi}},
       {{"op", "filter"}, {"filter", "sharpen"}, {"amount", 4}, {"region", {{"rect", {10, 10, 40, 30}}}}, {"xi", xi}},
       {{"op", "saturate"}, {"xi", xi}},
@@ -139,7 +190,7 @@ TEST(RgbnEdit, SaturationBoundHoldsAfterEveryEditAndSessionsReplay) {
   });
   std::vector<EditReport> reps;
   const Rgbn out = apply_edits(base, session, &reps);
-  ASSERT_EQ(reps.size(), 6u);
+  ASSERT_EQ(reps.size(), 7u);
   const float s = float(std::sin(xi * M_PI / 180));
   for (size_t i = 0; i < out.size(); ++i) EXPECT_GE(out.normal[3 * i + 2], s - 1e-5f);
   EXPECT_LT(max_norm_error(out), 1e-5);

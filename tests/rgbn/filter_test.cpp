@@ -1,6 +1,8 @@
 // Filters on the slope field, curvature and segmentation: properties with known truth.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "core/error.h"
 #include "rgbn/analysis.h"
 #include "rgbn/filter.h"
@@ -190,4 +192,47 @@ TEST(RgbnSegment, SplitsTwoPlanesAndTwoColours) {
   EXPECT_EQ(segment(flat, o).count, 2);
   o.weight = EdgeWeight::Min;  // min: the normals agree everywhere, one segment
   EXPECT_EQ(segment(flat, o).count, 1);
+}
+
+TEST(RgbnSegment, NoSegmentBelowMinSizeAndEverySegmentConnected) {
+  // Noisy colour and relief: without min_size FH leaves many tiny segments.
+  const int w = 96, h = 64;
+  Rgbn im = from_height(rgbn_test::periodic_field(w, h, 77, 5.0f), 1.0f, true);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (float& a : im.albedo) a = u(rng);
+  SegmentOptions o;
+  o.k = 0.3f;
+  o.min_size = 1;
+  const Segmentation raw = segment(im, o);
+  std::vector<int> raw_size(raw.count, 0);
+  for (int l : raw.labels) raw_size[l]++;
+  ASSERT_GT(std::count_if(raw_size.begin(), raw_size.end(), [](int n) { return n < 30; }), 20);
+  o.min_size = 30;
+  const Segmentation s = segment(im, o);
+  std::vector<int> size(s.count, 0);
+  for (int l : s.labels) size[l]++;
+  for (int l = 0; l < s.count; ++l) EXPECT_GE(size[l], 30) << "segment " << l;
+  // Each segment is one 8-connected region (FH merges along grid edges only).
+  std::vector<char> seen(s.labels.size(), 0);
+  std::vector<int> regions(s.count, 0);
+  for (size_t start = 0; start < s.labels.size(); ++start) {
+    if (seen[start]) continue;
+    regions[s.labels[start]]++;
+    std::vector<size_t> stack = {start};
+    seen[start] = 1;
+    while (!stack.empty()) {
+      const size_t p = stack.back();
+      stack.pop_back();
+      const int x = int(p % w), y = int(p / w);
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+          const size_t q = size_t(yy) * w + xx;
+          if (!seen[q] && s.labels[q] == s.labels[p]) seen[q] = 1, stack.push_back(q);
+        }
+    }
+  }
+  for (int l = 0; l < s.count; ++l) EXPECT_EQ(regions[l], 1) << "segment " << l;
 }
