@@ -26,7 +26,7 @@ struct SynthCliOptions {
   std::string window;
   int64_t seed = 1;
   std::string randomness = "1,1,0.5,0.2,0";
-  int passes = 2;
+  std::string passes = "2";
   float kappa = 2.0f;
   bool tileable = false;
   std::string exemplar_tiles = "auto";
@@ -99,6 +99,21 @@ std::vector<float> parse_randomness(const std::string& text) {
   return out;
 }
 
+std::vector<int> parse_passes(const std::string& text) {
+  std::vector<int> out;
+  for (const auto& p : split(text, ',')) {
+    try {
+      size_t used = 0;
+      const int v = std::stoi(p, &used);
+      if (used != p.size()) throw std::invalid_argument(p);
+      out.push_back(v);
+    } catch (const std::exception&) {
+      throw UsageError(fmt::format("--passes: '{}' is not a whole number", p), "e.g. 2 or 4,4,2,2,1");
+    }
+  }
+  return out;
+}
+
 void run(const SynthCliOptions& o, const GlobalOptions& global) {
   using namespace synth;
   // Parse and check everything before reading pixels or writing files.
@@ -110,7 +125,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   SynthOptions options;
   options.seed = static_cast<uint32_t>(o.seed);
   options.randomness = parse_randomness(o.randomness);
-  options.passes = o.passes;
+  options.passes = parse_passes(o.passes);
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -261,8 +276,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
                   "Jitter per level, one value or a list coarse to fine (0 = tiling; large coarse values change "
                   "the layout, large fine values the detail)")
       ->capture_default_str();
-  cmd->add_option("--passes", o->passes, "Correction passes per level (each has 4 sub-passes)")
-      ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--passes", o->passes,
+                  "Correction passes per level (each has 4 sub-passes), one value or a list coarse to fine, 0..8")
+      ->capture_default_str();
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));

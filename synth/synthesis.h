@@ -27,7 +27,9 @@ struct SynthOptions {
   // Jitter strength r_l per synthesised level, coarse to fine (levels 1..L); one value applies to
   // every level, a shorter list repeats its last value for the finer levels. 0 = a plain tiling.
   std::vector<float> randomness = {1.0f, 1.0f, 0.5f, 0.2f, 0.0f};
-  int passes = 2;        // correction passes per level (each 4 sub-passes)
+  // Correction passes (each 4 sub-passes) per synthesised level, coarse to fine like randomness
+  // (one value applies to every level; a shorter list repeats its last value).
+  std::vector<int> passes = {2};
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
   float kappa = 2.0f;
@@ -54,6 +56,9 @@ void check_options(const Analysis& analysis, const SynthOptions& options);
 // The coarsest level that is synthesised (levels below it are the constant 0): 1 normally; with a
 // period, the first level at which the period is still an even number of pixels.
 int first_level(const Analysis& analysis, const SynthOptions& options);
+
+// The correction passes at level l (1..L).
+int passes_at(const SynthOptions& options, int level);
 
 // Holds the analysis on the device and the built program. One per analysis; not thread-safe.
 class Synthesizer {
