@@ -25,9 +25,10 @@ struct SynthCliOptions {
   std::string size = "512";
   std::string window;
   int64_t seed = 1;
-  std::string randomness = "1,1,0.5,0.2,0";
+  std::string randomness = "1,0";
   std::string passes = "2";
-  float kappa = 2.0f;
+  float kappa = 8.0f;
+  int finest_passes = 1;
   bool tileable = false;
   std::string exemplar_tiles = "auto";
   std::string coords;
@@ -126,6 +127,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.seed = static_cast<uint32_t>(o.seed);
   options.randomness = parse_randomness(o.randomness);
   options.passes = parse_passes(o.passes);
+  options.finest_passes = o.finest_passes;
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -227,6 +229,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"seed", options.seed},
                 {"randomness", options.randomness},
                 {"passes", options.passes},
+                {"finest_passes", options.finest_passes},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
@@ -279,6 +282,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--passes", o->passes,
                   "Correction passes per level (each has 4 sub-passes), one value or a list coarse to fine, 0..8")
       ->capture_default_str();
+  cmd->add_option("--finest-passes", o->finest_passes,
+                  "Correction passes at the finest level (the costliest), overriding --passes there; -1 = as --passes")
+      ->capture_default_str()->check(CLI::Range(-1, 8));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));

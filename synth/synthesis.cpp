@@ -175,7 +175,7 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   }
   for (float r : o.randomness) {
     if (!(r >= 0.0f && r <= 4.0f)) {
-      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 0.5 = default, 1 = strong");
+      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 1 = strong (default 1,0: jitter the first level only)");
     }
   }
   if (!o.jitter_map.empty() &&
@@ -197,6 +197,7 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   }
   for (int p : o.passes)
     if (p < 0 || p > 8) throw UsageError("--passes must be in [0, 8]");
+  if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
     throw UsageError("the tiling period must be in [2, 16777216]");
   if ((o.period_x > 0) != (o.period_y > 0)) throw UsageError("give a period along both axes or neither");
@@ -212,9 +213,11 @@ int first_level(const Analysis& a, const SynthOptions& o) {
   return std::max(1, a.levels - tz + 1);
 }
 
-int passes_at(const SynthOptions& o, int level) {
+int passes_at(const Analysis& a, const SynthOptions& o, int level) {
+  if (level == a.levels && o.finest_passes >= 0) return o.finest_passes;
   if (o.passes.empty()) return 0;
-  return o.passes[static_cast<size_t>(std::clamp(level - 1, 0, static_cast<int>(o.passes.size()) - 1))];
+  const int i = std::clamp(level - first_level(a, o), 0, static_cast<int>(o.passes.size()) - 1);
+  return o.passes[static_cast<size_t>(i)];
 }
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
@@ -247,7 +250,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   const int L = a.levels;
   const int l0 = first_level(a, o);
   // The reach of level l's correction: each sub-pass reads one pixel around, 4 per pass.
-  auto pad_at = [&](int l) { return 4 * passes_at(o, l) + 2; };
+  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2; };
   const int pad = pad_at(L);
   // Regions, finest first: E_L = window + pad_L; E_{l-1} = parents(E_l) + pad_{l-1}.
   std::vector<Region> region(L + 1);
@@ -277,7 +280,9 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     cl::Buffer S = ocl::with_cl_errors("allocating synthesis level", [&] {
       return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
     });
-    const size_t ri = static_cast<size_t>(std::min<int>(l - 1, static_cast<int>(o.randomness.size()) - 1));
+    // The list starts at the first synthesised level (level 1, or the coarsest level a tileable
+    // period allows), so the layout-changing first value is never skipped.
+    const size_t ri = static_cast<size_t>(std::min<int>(l - l0, static_cast<int>(o.randomness.size()) - 1));
     const float rl = o.randomness[ri];
     const cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
     const cl_long period_x = o.period_x > 0 ? o.period_x >> (L - l) : 0;
@@ -302,7 +307,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
                 static_cast<cl_int>(o.pastes.size()));
     const auto& lv = dev.levels[l];
-    for (int pass = 0; pass < passes_at(o, l); ++pass) {
+    for (int pass = 0; pass < passes_at(a, o, l); ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
