@@ -173,8 +173,8 @@ void appearance_level(const Channels& ch, const std::vector<float>& plane, int s
   }
 }
 
-const int kTapDx[kNeighbourTaps] = {0, -1, 1, -1, 1};
-const int kTapDy[kNeighbourTaps] = {0, -1, -1, 1, 1};
+const int kTapDx[kNeighbourTaps] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
+const int kTapDy[kNeighbourTaps] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
 
 void gather_taps(const AnalysisLevel& lv, int w, int h, bool toroidal, int x, int y, int8_t* taps) {
   for (int t = 0; t < kNeighbourTaps; ++t) {

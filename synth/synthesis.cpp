@@ -74,12 +74,12 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
-  const int tdx[5] = {0, -1, 1, -1, 1};
-  const int tdy[5] = {0, -1, -1, 1, 1};
+  const int tdx[9] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
+  const int tdy[9] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
-  for (int t = 0; t < 5; ++t) {
+  for (int t = 0; t < 9; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
     global const char* a = A + 8 * ((long)c.y * ew + c.x);
