@@ -25,8 +25,8 @@ struct SynthCliOptions {
   std::string size = "512";
   std::string window;
   int64_t seed = 1;
-  std::string randomness = "1,0";
-  std::string passes = "2";
+  std::string randomness = "2,0";
+  std::string passes = "0,2";
   float kappa = 8.0f;
   int finest_passes = 1;
   bool tileable = false;
