@@ -276,8 +276,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--seed", o->seed, "Seed of every random choice")->capture_default_str()->check(
       CLI::Range(int64_t(0), int64_t(0xffffffff)));
   cmd->add_option("--randomness", o->randomness,
-                  "Jitter per level, one value or a list coarse to fine (0 = tiling; large coarse values change "
-                  "the layout, large fine values the detail)")
+                  "Jitter per level, one value or a list coarse to fine, in units of half the level's spacing (0 = "
+                  "tiling; the default 2,0 moves the first level's blocks anywhere in the exemplar and keeps "
+                  "finer levels coherent; large fine values change the detail)")
       ->capture_default_str();
   cmd->add_option("--passes", o->passes,
                   "Correction passes per level (each has 4 sub-passes), one value or a list coarse to fine, 0..8")
