@@ -25,7 +25,7 @@ struct SynthCliOptions {
   std::string size = "512";
   std::string window;
   int64_t seed = 1;
-  std::string randomness = "2,0";
+  std::string randomness = "1,0";
   std::string passes = "0,2";
   float kappa = 8.0f;
   int finest_passes = 1;
@@ -276,8 +276,8 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--seed", o->seed, "Seed of every random choice")->capture_default_str()->check(
       CLI::Range(int64_t(0), int64_t(0xffffffff)));
   cmd->add_option("--randomness", o->randomness,
-                  "Jitter per level, one value or a list coarse to fine, in units of half the level's spacing (0 = "
-                  "tiling; the default 2,0 moves the first level's blocks anywhere in the exemplar and keeps "
+                  "Jitter per level, one value or a list coarse to fine, in units of the level's spacing (0 = "
+                  "tiling; the default 1,0 moves the first level's blocks anywhere in the exemplar and keeps "
                   "finer levels coherent; large fine values change the detail)")
       ->capture_default_str();
   cmd->add_option("--passes", o->passes,

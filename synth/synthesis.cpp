@@ -175,7 +175,7 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   }
   for (float r : o.randomness) {
     if (!(r >= 0.0f && r <= 4.0f)) {
-      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 1 = strong (default 2,0: jitter the first level only)");
+      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 1 = up to one level spacing (default 1,0: jitter the first level only)");
     }
   }
   if (!o.jitter_map.empty() &&

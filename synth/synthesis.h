@@ -27,10 +27,10 @@ struct SynthOptions {
   // Jitter strength r_l per synthesised level, coarse to fine (from first_level() to L: levels 1..L
   // unless a tileable period skips the coarsest); one value applies to
   // every level, a shorter list repeats its last value for the finer levels. 0 = a plain tiling.
-  // Default: jitter only the first level, by up to +-h_1 (h_1 >= half the exemplar, so any
-  // source position): patches of about half the exemplar, re-joined by the correction at every
-  // finer level; see docs/synth.md for the measures behind it.
-  std::vector<float> randomness = {2.0f, 0.0f};
+  // r_l = 1 jitters by up to +-h_l. Default: jitter only the first level, where +-h_1 (h_1 >= half
+  // the exemplar) reaches any source position: patches of about half the exemplar, re-joined by
+  // the correction at every finer level; see docs/synth.md for the measures behind it.
+  std::vector<float> randomness = {1.0f, 0.0f};
   // Correction passes (each 4 sub-passes) per synthesised level, coarse to fine like randomness
   // (one value applies to every level; a shorter list repeats its last value). Default: none at
   // the first level (there the correction pulled the jittered blocks back to the plain tiling, a
