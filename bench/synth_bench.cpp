@@ -3,6 +3,12 @@
 //
 //   bench_synth --exemplars DIR [--size 512] [--proctex build/cli/proctex] [--gmic gmic]
 //               [--markdown out.md] [--sheet docs/synth-bench.png] [--work DIR] [--big 4096]
+//               [--reuse-gmic] [--proctex-args "--passes 3 ..."]
+//
+// --reuse-gmic keeps G'MIC outputs already in the work folder (quality only; its time is then not
+// measured, shown as 0, and no speed-up is computed): for iterating on proctex's options.
+// --proctex-args adds options to the proctex CLI runs (the in-process timing uses the defaults).
+// --big 0 skips the 256^2 analysis and the big output.
 //
 // For every exemplar (128x128): the time of `proctex synth` as a process (wall and CPU, analysis
 // cached) and of the synthesis alone in this process (warm), the time of `gmic EX -srand 1
@@ -22,6 +28,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -159,6 +166,8 @@ int main(int argc, char** argv) {
   fs::path exemplar_dir, work = "build/bench-synth", markdown, sheet;
   std::string proctex_bin = "build/cli/proctex", gmic = "gmic";
   int size = 512, big = 4096;
+  bool reuse_gmic = false;
+  std::vector<std::string> extra_args;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -170,6 +179,11 @@ int main(int argc, char** argv) {
     else if (a == "--gmic") gmic = next();
     else if (a == "--size") size = std::stoi(next());
     else if (a == "--big") big = std::stoi(next());
+    else if (a == "--reuse-gmic") reuse_gmic = true;
+    else if (a == "--proctex-args") {
+      std::istringstream words(next());
+      for (std::string w; words >> w;) extra_args.push_back(w);
+    }
     else {
       std::fprintf(stderr, "usage: bench_synth --exemplars DIR [--size 512] [--big 4096] [--gmic gmic] "
                            "[--proctex build/cli/proctex] [--markdown out.md] [--sheet out.png] [--work DIR]\n");
@@ -203,10 +217,12 @@ int main(int argc, char** argv) {
       const fs::path out_p = work / (name + "_proctex.png"), out_g = work / (name + "_gmic.png");
       const std::string sz = std::to_string(size);
       // CLI as a user runs it (the first call analyses and fills the cache; time the second).
-      run_process({proctex_bin, "-q", "synth", file.string(), "-o", out_p.string(), "--size", sz});
+      std::vector<std::string> cmd = {proctex_bin, "-q", "synth", file.string(), "-o", out_p.string(), "--size", sz};
+      cmd.insert(cmd.end(), extra_args.begin(), extra_args.end());
+      run_process(cmd);
       std::vector<double> cli_wall, cli_cpu;
       for (int r = 0; r < 1; ++r) {
-        const auto t = run_process({proctex_bin, "-q", "synth", file.string(), "-o", out_p.string(), "--size", sz});
+        const auto t = run_process(cmd);
         if (t.exit_code != 0) throw Error("proctex synth failed on " + file.string());
         cli_wall.push_back(t.wall), cli_cpu.push_back(t.cpu);
       }
@@ -225,14 +241,23 @@ int main(int argc, char** argv) {
       }
       // G'MIC, same size, its default threads (all cores, like PoCL); one run (it takes seconds).
       std::vector<double> g_wall, g_cpu;
-      for (int r = 0; r < 1; ++r) {
+      for (int r = 0; r < (reuse_gmic && fs::exists(out_g) ? 0 : 1); ++r) {
         const auto t = run_process({gmic, file.string(), "-srand", "1", "-syntexturize_matchpatch", sz + "," + sz,
                                     "-o", out_g.string()});
         if (t.exit_code != 0) throw Error("gmic failed on " + file.string(), "install it: apt-get install gmic");
         g_wall.push_back(t.wall), g_cpu.push_back(t.cpu);
       }
       const Image ip = load_image(out_p), ig = load_image(out_g);
-      const Quality qp = quality(ex.colour, ip), qg = quality(ex.colour, ig);
+      const Quality qp = quality(ex.colour, ip);
+      Quality qg;
+      // With --reuse-gmic, G'MIC's measures are computed once and kept beside its output.
+      const fs::path qfile = work / (name + "_gmic.quality");
+      if (reuse_gmic && g_cpu.empty() && fs::exists(qfile)) {
+        std::ifstream(qfile) >> qg.coherence >> qg.completeness >> qg.similarity;
+      } else {
+        qg = quality(ex.colour, ig);
+        std::ofstream(qfile) << fmt::format("{:.9g} {:.9g} {:.9g}\n", qg.coherence, qg.completeness, qg.similarity);
+      }
       coh_p.push_back(qp.coherence), coh_g.push_back(qg.coherence);
       com_p.push_back(qp.completeness), com_g.push_back(qg.completeness);
       sim_p.push_back(qp.similarity), sim_g.push_back(qg.similarity);
@@ -260,7 +285,7 @@ int main(int argc, char** argv) {
 
     // Analysis of a 256^2 exemplar (no cache), and a big output window by window.
     std::string extra;
-    if (!files.empty()) {
+    if (!files.empty() && big > 0) {
       synth::Exemplar ex;
       ex.colour = resize(synth::load_exemplar_image(files.front()), 256, 256);
       std::vector<double> times;

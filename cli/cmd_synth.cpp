@@ -26,9 +26,10 @@ struct SynthCliOptions {
   std::string size = "512";
   std::string window;
   int64_t seed = 1;
-  std::string randomness = "1,1,0.5,0.2,0";
-  int passes = 2;
-  float kappa = 2.0f;
+  std::string randomness = "1,0";
+  std::string passes = "0,2";
+  float kappa = 8.0f;
+  int finest_passes = 1;
   bool tileable = false;
   std::string exemplar_tiles = "auto";
   std::string coords;
@@ -102,6 +103,21 @@ std::vector<float> parse_randomness(const std::string& text) {
   return out;
 }
 
+std::vector<int> parse_passes(const std::string& text) {
+  std::vector<int> out;
+  for (const auto& p : split(text, ',')) {
+    try {
+      size_t used = 0;
+      const int v = std::stoi(p, &used);
+      if (used != p.size()) throw std::invalid_argument(p);
+      out.push_back(v);
+    } catch (const std::exception&) {
+      throw UsageError(fmt::format("--passes: '{}' is not a whole number", p), "e.g. 2 or 4,4,2,2,1");
+    }
+  }
+  return out;
+}
+
 // proctex synth --graph g.json: synthesis on a multiscale exemplar graph (synth/graph_synthesis.h).
 void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
   using namespace synth;
@@ -121,7 +137,8 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
   SynthOptions options;
   options.seed = static_cast<uint32_t>(o.seed);
   options.randomness = parse_randomness(o.randomness);
-  options.passes = o.passes;
+  options.passes = parse_passes(o.passes);
+  options.finest_passes = o.finest_passes;
   options.kappa = o.kappa;
   std::vector<StripTarget> files{{o.output, false}};
   if (!o.coords.empty()) files.push_back({o.coords, true});
@@ -182,6 +199,7 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"seed", options.seed},
                 {"randomness", options.randomness},
                 {"passes", options.passes},
+                {"finest_passes", options.finest_passes},
                 {"coherence", options.kappa},
                 {"coords", o.coords},
                 {"analysis_hash", analysis.hash},
@@ -214,7 +232,8 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   SynthOptions options;
   options.seed = static_cast<uint32_t>(o.seed);
   options.randomness = parse_randomness(o.randomness);
-  options.passes = o.passes;
+  options.passes = parse_passes(o.passes);
+  options.finest_passes = o.finest_passes;
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -316,6 +335,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"seed", options.seed},
                 {"randomness", options.randomness},
                 {"passes", options.passes},
+                {"finest_passes", options.finest_passes},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
@@ -364,11 +384,18 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--seed", o->seed, "Seed of every random choice")->capture_default_str()->check(
       CLI::Range(int64_t(0), int64_t(0xffffffff)));
   cmd->add_option("--randomness", o->randomness,
-                  "Jitter per level, one value or a list coarse to fine (0 = tiling; large coarse values change "
-                  "the layout, large fine values the detail)")
+                  "Jitter per level, one value or a list coarse to fine, in units of the level's spacing (0 = "
+                  "tiling; the default 1,0 moves the first level's blocks anywhere in the exemplar and keeps "
+                  "finer levels coherent; large fine values change the detail; with --graph the last value "
+                  "repeats for deeper levels, 1,1,0.5,0.3 suits deep zooms)")
       ->capture_default_str();
-  cmd->add_option("--passes", o->passes, "Correction passes per level (each has 4 sub-passes)")
-      ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--passes", o->passes,
+                  "Correction passes per level (each has 4 sub-passes), one value or a list coarse to fine, 0..8 "
+                  "(with --graph: the last value, at every level)")
+      ->capture_default_str();
+  cmd->add_option("--finest-passes", o->finest_passes,
+                  "Correction passes at the finest level (the costliest), overriding --passes there; -1 = as --passes")
+      ->capture_default_str()->check(CLI::Range(-1, 8));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));

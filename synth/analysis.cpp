@@ -119,9 +119,10 @@ Eigen::MatrixXd principal_axes(const Eigen::MatrixXd& X, int dims, Eigen::Vector
   return axes;
 }
 
-// Rows used to estimate a covariance: every texel up to 16k, else a regular subsample.
+// Rows used to estimate a covariance: every texel up to 8k, else a regular subsample (8k rows
+// estimate a 75 x 75 covariance well; 16k cost 12% of a 256^2 analysis in the GEMM).
 std::vector<size_t> sample_rows(size_t n) {
-  const size_t target = 16384;
+  const size_t target = 8192;
   std::vector<size_t> rows;
   const size_t step = std::max<size_t>(1, n / target);
   for (size_t i = 0; i < n; i += step) rows.push_back(i);
@@ -173,8 +174,8 @@ void appearance_level(const Channels& ch, const std::vector<float>& plane, int s
   }
 }
 
-const int kTapDx[kNeighbourTaps] = {0, -1, 1, -1, 1};
-const int kTapDy[kNeighbourTaps] = {0, -1, -1, 1, 1};
+const int kTapDx[kNeighbourTaps] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
+const int kTapDy[kNeighbourTaps] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
 
 void gather_taps(const AnalysisLevel& lv, int w, int h, bool toroidal, int x, int y, int8_t* taps) {
   for (int t = 0; t < kNeighbourTaps; ++t) {
@@ -406,11 +407,13 @@ bool resolve_toroidal(const Exemplar& ex, const AnalysisOptions& o) {
 
 std::array<int16_t, kAppearanceDims> project_neighbourhood(const AnalysisLevel& lv, const int8_t* taps) {
   std::array<int16_t, kAppearanceDims> out{};
-  for (int j = 0; j < kAppearanceDims; ++j) {
-    int32_t acc = 0;
-    for (int d = 0; d < kNeighbourDims; ++d) acc += int32_t(taps[d]) * lv.projection[d * kAppearanceDims + j];
-    out[j] = static_cast<int16_t>(acc >> kProjectionShift);
+  int32_t acc[kAppearanceDims] = {};
+  const int32_t* p = lv.projection.data();
+  for (int d = 0; d < kNeighbourDims; ++d, p += kAppearanceDims) {  // rows in order: vectorises
+    const int32_t t = taps[d];
+    for (int j = 0; j < kAppearanceDims; ++j) acc[j] += t * p[j];
   }
+  for (int j = 0; j < kAppearanceDims; ++j) out[j] = static_cast<int16_t>(acc[j] >> kProjectionShift);
   return out;
 }
 

@@ -4,8 +4,9 @@
 //     scale h_l = 2^(L-l) (toroidally when the exemplar tiles, mirrored at the borders otherwise);
 //   - appearance space per level: the 5x5 neighbourhood at spacing h_l of every channel, reduced by
 //     PCA to 8 dimensions and quantised to signed bytes;
-//   - the matching neighbourhood N(u): the appearance vectors at u and its four diagonal neighbours
-//     u + h_l (+-1, +-1) (5 x 8 = 40 values), reduced by a second PCA to 8 dimensions with an
+//   - the matching neighbourhood N(u): the appearance vectors at u and its eight neighbours
+//     u + h_l (dx, dy), dx, dy in {-1, 0, 1} (9 x 8 = 72 values; the 4 diagonals alone, LH06's
+//     reduced neighbourhood, cut structures more: docs/synth.md), reduced by a second PCA to 8 dimensions with an
 //     integer projection, so synthesis on any device computes bit-identical distances;
 //   - k-coherence candidates (k = 2): every texel itself and its most similar texel at least 5% of
 //     the exemplar size away (spatially dispersed), found by a PatchMatch search.
@@ -20,10 +21,10 @@
 namespace proctex::synth {
 
 inline constexpr int kAppearanceDims = 8;
-inline constexpr int kNeighbourTaps = 5;  // centre + 4 diagonals
+inline constexpr int kNeighbourTaps = 9;  // the 3x3 taps at spacing h_l
 inline constexpr int kNeighbourDims = kAppearanceDims * kNeighbourTaps;
 inline constexpr int kProjectionShift = 8;  // fixed-point bits of the integer projection
-inline constexpr int kAnalysisVersion = 4;
+inline constexpr int kAnalysisVersion = 5;
 
 enum class Tiling { Auto, Toroidal, Bounded };
 
@@ -36,7 +37,7 @@ struct AnalysisLevel {
   std::vector<int8_t> appearance;        // w * h * 8
   std::vector<int16_t> neighbourhood;    // w * h * 8: projected N(u)
   std::vector<int32_t> coherent;         // w * h: index y * w + x of the k = 2 candidate
-  std::vector<int32_t> projection;       // 40 * 8: fixed-point PCA basis, row-major [tap*8+dim][out]
+  std::vector<int32_t> projection;       // 72 * 8: fixed-point PCA basis, row-major [tap*8+dim][out]
 };
 
 struct Analysis {
@@ -66,7 +67,7 @@ std::filesystem::path default_cache_dir();
 Analysis analyse_cached(const Exemplar& exemplar, const AnalysisOptions& options,
                         const std::filesystem::path& cache_dir);
 
-// Exposed for tests: the synthesis-side integer projection of a 40-value neighbourhood.
-std::array<int16_t, kAppearanceDims> project_neighbourhood(const AnalysisLevel& level, const int8_t* taps40);
+// Exposed for tests: the synthesis-side integer projection of a 72-value neighbourhood.
+std::array<int16_t, kAppearanceDims> project_neighbourhood(const AnalysisLevel& level, const int8_t* taps);
 
 }  // namespace proctex::synth

@@ -24,7 +24,10 @@ namespace proctex::synth {
 namespace {
 
 constexpr int kDims = kAppearanceDims;  // 8
-constexpr int kTaps = kNeighbourTaps;   // 5
+// Han-style matching neighbourhood of the graph synthesis: the centre and its four diagonal
+// neighbours (its own choice, independent of the single-exemplar synthesis' 3x3 taps).
+constexpr int kTaps = 5;
+constexpr int kGraphNeighbourDims = kAppearanceDims * kTaps;
 constexpr int kColourTaps = 25;
 constexpr int kAppIn = kColourTaps * 3;  // 75
 constexpr int kLinkBias = 4;  // a continuing link may be 4/3 as far as the best (patch_match)
@@ -423,7 +426,7 @@ bool load_graph_cache(const std::filesystem::path& file, GraphAnalysis& a) {
   const uint64_t n = static_cast<uint64_t>(a.width) * a.height, N = a.nodes(), M = static_cast<uint64_t>(slots);
   if (!read_vec(f, a.appearance, N * n * kDims) || !read_vec(f, a.feature, N * n * kDims) ||
       !read_vec(f, a.coherent, N * n) || !read_vec(f, a.link_node, N * M) || !read_vec(f, a.link_texel, N * M * n) ||
-      !read_vec(f, a.link_offset, N * M * n * 4) || !read_vec(f, a.projection, uint64_t(kNeighbourDims) * kDims) ||
+      !read_vec(f, a.link_offset, N * M * n * 4) || !read_vec(f, a.projection, uint64_t(kGraphNeighbourDims) * kDims) ||
       !read_vec(f, a.offset_response, uint64_t(kDims) * 3) || !read_vec(f, a.colour, N * n * 3))
     return false;
   for (int32_t c : a.coherent)
@@ -619,15 +622,15 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
     }
   };
   {
-    Eigen::VectorXd m2 = Eigen::VectorXd::Zero(kNeighbourDims);
-    Eigen::MatrixXd s2 = Eigen::MatrixXd::Zero(kNeighbourDims, kNeighbourDims);
+    Eigen::VectorXd m2 = Eigen::VectorXd::Zero(kGraphNeighbourDims);
+    Eigen::MatrixXd s2 = Eigen::MatrixXd::Zero(kGraphNeighbourDims, kGraphNeighbourDims);
     size_t r2 = 0;
-    int8_t buf[kNeighbourDims];
-    Eigen::VectorXd v(kNeighbourDims);
+    int8_t buf[kGraphNeighbourDims];
+    Eigen::VectorXd v(kGraphNeighbourDims);
     for (size_t nd = 0; nd < N; ++nd)
       for (size_t t = 0; t < n; t += step) {
         taps(nd, t, buf);
-        for (int d = 0; d < kNeighbourDims; ++d) v(d) = buf[d];
+        for (int d = 0; d < kGraphNeighbourDims; ++d) v(d) = buf[d];
         m2 += v;
         s2.selfadjointView<Eigen::Lower>().rankUpdate(v);
         ++r2;
@@ -637,19 +640,19 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
     c2 = c2 / double(r2) - m2 * m2.transpose();
     double top2 = 0;
     const Eigen::MatrixXd ax2 = principal_axes(c2, kDims, top2);
-    a.projection.resize(kNeighbourDims * kDims);
-    for (int d = 0; d < kNeighbourDims; ++d)
+    a.projection.resize(kGraphNeighbourDims * kDims);
+    for (int d = 0; d < kGraphNeighbourDims; ++d)
       for (int k = 0; k < kDims; ++k)
         a.projection[d * kDims + k] = static_cast<int32_t>(std::lround(ax2(d, k) * (1 << kProjectionShift)));
   }
   a.feature.resize(N * n * kDims);
   parallel_for(static_cast<int>(N), [&](int nd) {
-    int8_t buf[kNeighbourDims];
+    int8_t buf[kGraphNeighbourDims];
     for (size_t t = 0; t < n; ++t) {
       taps(nd, t, buf);
       for (int k = 0; k < kDims; ++k) {
         int32_t acc = 0;
-        for (int d = 0; d < kNeighbourDims; ++d) acc += int32_t(buf[d]) * a.projection[d * kDims + k];
+        for (int d = 0; d < kGraphNeighbourDims; ++d) acc += int32_t(buf[d]) * a.projection[d * kDims + k];
         a.feature[(nd * n + t) * kDims + k] = static_cast<int16_t>(acc >> kProjectionShift);
       }
     }
@@ -854,7 +857,11 @@ std::vector<GraphPixel> GraphSynthesizer::synthesise(const Window& win, const Sy
   for (float r : o.randomness)
     if (!(r >= 0.0f && r <= 4.0f))
       throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 0.5 = default, 1 = strong");
-  if (o.passes < 0 || o.passes > 8) throw UsageError("--passes must be in [0, 8]");
+  // One number of correction passes for every level of a graph synthesis (its windows are padded
+  // once): the last value of the per-level list, i.e. the fine levels' value.
+  if (o.passes.empty()) throw UsageError("--passes needs at least one value");
+  const int passes = o.passes.back();
+  if (passes < 0 || passes > 8) throw UsageError("--passes must be in [0, 8]");
   if (zoom < 0 || zoom > kMaxGraphZoom)
     throw UsageError(fmt::format("--zoom {} is out of range", zoom), fmt::format("use 0..{}", kMaxGraphZoom));
   if (win.width <= 0 || win.height <= 0) throw UsageError("the window must have a positive width and height");
@@ -867,7 +874,7 @@ std::vector<GraphPixel> GraphSynthesizer::synthesise(const Window& win, const Sy
     throw UsageError(fmt::format("--randomness has {} values but this synthesis has {} levels", o.randomness.size(), T),
                      "give one value, or at most one per level, coarse to fine");
 
-  const int pad = 4 * o.passes + 2;
+  const int pad = 4 * passes + 2;
   std::vector<Region> region(T + 1);
   region[T] = {win.x - pad, win.y - pad, win.width + 2 * pad, win.height + 2 * pad};
   for (int t = T; t > 1; --t) {
@@ -900,7 +907,7 @@ std::vector<GraphPixel> GraphSynthesizer::synthesise(const Window& win, const Sy
              static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), rq, static_cast<cl_uint>(o.seed),
              static_cast<cl_uint>(t));
     cl::Buffer valid = ocl::upload(schedule.valid[t]);
-    for (int pass = 0; pass < o.passes; ++pass) {
+    for (int pass = 0; pass < passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, R, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                  static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1),

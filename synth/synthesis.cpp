@@ -74,12 +74,12 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
-  const int tdx[5] = {0, -1, 1, -1, 1};
-  const int tdy[5] = {0, -1, -1, 1, 1};
+  const int tdx[9] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
+  const int tdy[9] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
-  for (int t = 0; t < 5; ++t) {
+  for (int t = 0; t < 9; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
     global const char* a = A + 8 * ((long)c.y * ew + c.x);
@@ -175,7 +175,7 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   }
   for (float r : o.randomness) {
     if (!(r >= 0.0f && r <= 4.0f)) {
-      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 0.5 = default, 1 = strong");
+      throw UsageError(fmt::format("randomness {} is outside [0, 4]", r), "0 = tiling, 1 = up to one level spacing (default 1,0: jitter the first level only)");
     }
   }
   if (!o.jitter_map.empty() &&
@@ -190,7 +190,14 @@ void check_options(const Analysis& a, const SynthOptions& o) {
     if (std::llabs(p.out_x) > kMaxCoordinate || std::llabs(p.out_y) > kMaxCoordinate)
       throw UsageError("the paste position is too large", "positions must lie within +-2^60");
   }
-  if (o.passes < 0 || o.passes > 8) throw UsageError("--passes must be in [0, 8]");
+  if (o.passes.empty()) throw UsageError("--passes needs at least one value");
+  if (static_cast<int>(o.passes.size()) > a.levels) {
+    throw UsageError(fmt::format("--passes has {} values but this exemplar has {} levels", o.passes.size(), a.levels),
+                     "give one value, or at most one per level, coarse to fine");
+  }
+  for (int p : o.passes)
+    if (p < 0 || p > 8) throw UsageError("--passes must be in [0, 8]");
+  if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
     throw UsageError("the tiling period must be in [2, 16777216]");
   if ((o.period_x > 0) != (o.period_y > 0)) throw UsageError("give a period along both axes or neither");
@@ -204,6 +211,13 @@ int first_level(const Analysis& a, const SynthOptions& o) {
   if (o.period_x <= 0) return 1;
   const int tz = std::min(ctz64(o.period_x), ctz64(o.period_y));
   return std::max(1, a.levels - tz + 1);
+}
+
+int passes_at(const Analysis& a, const SynthOptions& o, int level) {
+  if (level == a.levels && o.finest_passes >= 0) return o.finest_passes;
+  if (o.passes.empty()) return 0;
+  const int i = std::clamp(level - first_level(a, o), 0, static_cast<int>(o.passes.size()) - 1);
+  return o.passes[static_cast<size_t>(i)];
 }
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
@@ -235,16 +249,19 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   }
   const int L = a.levels;
   const int l0 = first_level(a, o);
-  const int pad = 4 * o.passes + 2;
-  // Regions, finest first: E_L = window + pad; E_{l-1} = parents(E_l) + pad.
+  // The reach of level l's correction: each sub-pass reads one pixel around, 4 per pass.
+  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2; };
+  const int pad = pad_at(L);
+  // Regions, finest first: E_L = window + pad_L; E_{l-1} = parents(E_l) + pad_{l-1}.
   std::vector<Region> region(L + 1);
   region[L] = {win.x - pad, win.y - pad, win.width + 2 * pad, win.height + 2 * pad};
   for (int l = L; l > l0; --l) {
+    const int pp = pad_at(l - 1);
     const Region& r = region[l];
     const int64_t px0 = r.x >> 1, py0 = r.y >> 1;
     const int64_t px1 = (r.x + r.w - 1) >> 1, py1 = (r.y + r.h - 1) >> 1;
-    region[l - 1] = {px0 - pad, py0 - pad, static_cast<int>(px1 - px0 + 1) + 2 * pad,
-                     static_cast<int>(py1 - py0 + 1) + 2 * pad};
+    region[l - 1] = {px0 - pp, py0 - pp, static_cast<int>(px1 - px0 + 1) + 2 * pp,
+                     static_cast<int>(py1 - py0 + 1) + 2 * pp};
   }
 
   auto& dev = *device_;
@@ -263,7 +280,9 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     cl::Buffer S = ocl::with_cl_errors("allocating synthesis level", [&] {
       return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
     });
-    const size_t ri = static_cast<size_t>(std::min<int>(l - 1, static_cast<int>(o.randomness.size()) - 1));
+    // The list starts at the first synthesised level (level 1, or the coarsest level a tileable
+    // period allows), so the layout-changing first value is never skipped.
+    const size_t ri = static_cast<size_t>(std::min<int>(l - l0, static_cast<int>(o.randomness.size()) - 1));
     const float rl = o.randomness[ri];
     const cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
     const cl_long period_x = o.period_x > 0 ? o.period_x >> (L - l) : 0;
@@ -288,7 +307,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
                 static_cast<cl_int>(o.pastes.size()));
     const auto& lv = dev.levels[l];
-    for (int pass = 0; pass < o.passes; ++pass) {
+    for (int pass = 0; pass < passes_at(a, o, l); ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),

@@ -24,13 +24,24 @@ struct Window {
 
 struct SynthOptions {
   uint32_t seed = 1;
-  // Jitter strength r_l per synthesised level, coarse to fine (levels 1..L); one value applies to
+  // Jitter strength r_l per synthesised level, coarse to fine (from first_level() to L: levels 1..L
+  // unless a tileable period skips the coarsest); one value applies to
   // every level, a shorter list repeats its last value for the finer levels. 0 = a plain tiling.
-  std::vector<float> randomness = {1.0f, 1.0f, 0.5f, 0.2f, 0.0f};
-  int passes = 2;        // correction passes per level (each 4 sub-passes)
+  // r_l = 1 jitters by up to +-h_l. Default: jitter only the first level, where +-h_1 (h_1 >= half
+  // the exemplar) reaches any source position: patches of about half the exemplar, re-joined by
+  // the correction at every finer level; see docs/synth.md for the measures behind it.
+  std::vector<float> randomness = {1.0f, 0.0f};
+  // Correction passes (each 4 sub-passes) per synthesised level, coarse to fine like randomness
+  // (one value applies to every level; a shorter list repeats its last value). Default: none at
+  // the first level (there the correction pulled the jittered blocks back to the plain tiling, a
+  // visible lattice), 2 below.
+  std::vector<int> passes = {0, 2};
+  // Passes at the finest level (the most pixels), overriding `passes` there; -1 = as `passes`.
+  // A second pass at the finest level changed no measure (docs/synth.md) and cost ~40% of the time.
+  int finest_passes = 1;
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
-  float kappa = 2.0f;
+  float kappa = 8.0f;
   // Spatially varying randomness (Lefebvre's jitter map): 0..255 per pixel, scaling r_l at the
   // finest-level pixel; the map repeats over the plane from (0, 0). Empty = 255 everywhere.
   std::vector<uint8_t> jitter_map;
@@ -54,6 +65,9 @@ void check_options(const Analysis& analysis, const SynthOptions& options);
 // The coarsest level that is synthesised (levels below it are the constant 0): 1 normally; with a
 // period, the first level at which the period is still an even number of pixels.
 int first_level(const Analysis& analysis, const SynthOptions& options);
+
+// The correction passes at level l (first_level..L).
+int passes_at(const Analysis& analysis, const SynthOptions& options, int level);
 
 // Holds the analysis on the device and the built program. One per analysis; not thread-safe.
 class Synthesizer {

@@ -207,6 +207,33 @@ TEST(Synth, AnyWindowEqualsTheSameRegionOfALargerSynthesis) {
   }
 }
 
+TEST(Synth, PerLevelPassesKeepWindowsExact) {
+  // A different number of correction passes per level changes each level's reach (padding): any
+  // window must still equal the same region of a larger synthesis.
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  o.seed = 9;
+  o.randomness = {1.0f, 0.5f, 0.0f};
+  o.passes = {3, 0, 1, 2};
+  o.finest_passes = 2;
+  const Window whole{-(int64_t(1) << 33) + 7, 12345, 160, 96};
+  const auto big = s.synthesise(whole, o);
+  for (const Window part : {Window{whole.x, whole.y, 40, 96}, Window{whole.x + 41, whole.y + 13, 77, 50},
+                            Window{whole.x + 159, whole.y + 95, 1, 1}})
+    ASSERT_EQ(s.synthesise(part, o), cut(big, whole, part));
+  // The passes matter: without them the map is another one.
+  SynthOptions none = o;
+  none.passes = {0};
+  none.finest_passes = 0;
+  EXPECT_NE(s.synthesise(whole, none), big);
+  // Bad values are refused.
+  o.passes = {9};
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
+  o.passes = {2};
+  o.finest_passes = -2;
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
+}
+
 // Fraction of horizontally adjacent pixel pairs whose coordinates continue the exemplar (a
 // verbatim-copied patch); `column` < 0 means every column, else only pairs (column, column + 1).
 double coherence(const std::vector<int32_t>& S, int w, int h, int ew, int column = -1) {
@@ -256,6 +283,27 @@ TEST(Synth, TileableOutputWrapsWithoutASeam) {
   // And a period that is not a multiple of 2 is refused.
   o.period_x = o.period_y = 127;
   EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
+}
+
+TEST(Synth, SmallTileablePeriodIsStillRandomised) {
+  // A period of 16 px on a 64 px exemplar (6 levels) leaves only levels 3..6 to synthesise: the
+  // randomness list starts at the first of them, so the default (jitter the first level) still
+  // breaks the tiling instead of skipping its only non-zero value.
+  Synthesizer s(photo_analysis());
+  SynthOptions o;
+  o.period_x = o.period_y = 16;
+  ASSERT_EQ(first_level(photo_analysis(), o), 3);
+  const auto S = s.synthesise({0, 0, 64, 64}, o);
+  // Randomised: another seed gives another map (without jitter the seed would change nothing).
+  SynthOptions other = o;
+  other.seed = 2;
+  EXPECT_NE(s.synthesise({0, 0, 64, 64}, other), S) << "a tileable output must not be the plain tiling";
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const size_t i = static_cast<size_t>(y) * 64 + x, j = static_cast<size_t>(y % 16) * 64 + x % 16;
+      ASSERT_EQ(S[2 * i], S[2 * j]);
+      ASSERT_EQ(S[2 * i + 1], S[2 * j + 1]);
+    }
 }
 
 TEST(Synth, BoundedExemplarIsNotCopiedAcrossItsBorder) {
