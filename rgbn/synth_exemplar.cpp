@@ -58,7 +58,7 @@ std::unique_ptr<Prepared> prepare(const Rgbn& ex, const ExemplarSynthOptions& o)
   p->analysis = synth::analyse_cached(p->exemplar, {}, o.cache_dir);
   p->options.seed = uint32_t(o.seed);
   if (!o.randomness.empty()) p->options.randomness = o.randomness;
-  p->options.passes = o.passes;
+  p->options.passes = {o.passes};  // every level (rgbn synth --passes); the finest as synth/'s default
   p->options.kappa = o.coherence;
   synth::check_options(p->analysis, p->options);
   return p;

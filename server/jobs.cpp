@@ -203,6 +203,7 @@ nlohmann::json SynthJobOptions::to_json() const {
                       {"tileable", tileable},
                       {"seed", synth.seed},
                       {"passes", synth.passes},
+                      {"finest_passes", synth.finest_passes},
                       {"coherence", decimal(synth.kappa)},
                       {"randomness_scale", randomness_scale},
                       {"exemplar_tiles", exemplar_tiles == synth::Tiling::Auto       ? "auto"
@@ -220,11 +221,11 @@ nlohmann::json SynthJobOptions::to_json() const {
 SynthJobOptions synth_options_from_json(const nlohmann::json& j, int max_size) {
   if (!j.is_object()) throw UsageError("synth options must be a JSON object", "send e.g. {\"size\": 512, \"seed\": 3}");
   static const std::vector<std::string> known = {"size",     "tileable",       "seed",     "randomness", "randomness_scale",
-                                                 "passes",   "coherence",      "exemplar_tiles", "downscale", "from_job"};
+                                                 "passes",   "finest_passes",  "coherence",      "exemplar_tiles", "downscale", "from_job"};
   for (const auto& [k, v] : j.items())
     if (std::find(known.begin(), known.end(), k) == known.end())
       throw UsageError("unknown synth option '" + k + "'",
-                       "known: size, tileable, seed, randomness, randomness_scale, passes, coherence, exemplar_tiles, "
+                       "known: size, tileable, seed, randomness, randomness_scale, passes, finest_passes, coherence, exemplar_tiles, "
                        "downscale, from_job");
   SynthJobOptions o;
   if (j.contains("size") && !j["size"].is_null()) {
@@ -242,8 +243,24 @@ SynthJobOptions synth_options_from_json(const nlohmann::json& j, int max_size) {
   o.tileable = flag("tileable", false);
   o.downscale = flag("downscale", false);
   o.synth.seed = static_cast<uint32_t>(field<int64_t>(j, "seed", 1, 0, 0xffffffffLL));
-  o.synth.passes = field<int>(j, "passes", 2, 0, 8);
-  o.synth.kappa = static_cast<float>(field<double>(j, "coherence", 2.0, 0.0, 100.0));
+  // Defaults: the library's (= the command line's, so the result equals `proctex synth`'s).
+  if (j.contains("passes") && !j["passes"].is_null()) {
+    const auto& p = j["passes"];
+    const char* hint = "send \"passes\": 2 or a list coarse to fine, [0, 2], each in [0, 8]";
+    std::vector<int> values;
+    if (p.is_number_integer()) values.push_back(p.get<int>());
+    else if (p.is_array() && !p.empty() && p.size() <= 32)
+      for (const auto& x : p) {
+        if (!x.is_number_integer()) throw UsageError("'passes' must be whole numbers", hint);
+        values.push_back(x.get<int>());
+      }
+    else throw UsageError("'passes' must be a whole number or a list of 1-32 of them", hint);
+    for (int v : values)
+      if (v < 0 || v > 8) throw UsageError(fmt::format("'passes' {} is outside [0, 8]", v), hint);
+    o.synth.passes = values;
+  }
+  o.synth.finest_passes = field<int>(j, "finest_passes", o.synth.finest_passes, -1, 8);
+  o.synth.kappa = static_cast<float>(field<double>(j, "coherence", o.synth.kappa, 0.0, 100.0));
   o.randomness_scale = field<double>(j, "randomness_scale", 1.0, 0.0, 4.0);
   if (j.contains("randomness") && !j["randomness"].is_null()) {
     const auto& r = j["randomness"];
@@ -722,6 +739,7 @@ nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
                       {"tileable", o.tileable},
                       {"randomness", randomness},
                       {"passes", options.passes},
+                      {"finest_passes", options.finest_passes},
                       {"coherence", decimal(options.kappa)},
                       {"levels", analysis.levels},
                       {"first_level", synth::first_level(analysis, options)},
@@ -734,9 +752,10 @@ nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
                       {"strips", stats.strips},
                       {"device", ocl::Runtime::instance().device().name},
                       {"command", fmt::format("proctex synth exemplar.png -o synth.png --size {}x{} --seed {}{} --passes {} "
-                                              "--coherence {} --randomness {}{}",
+                                              "--finest-passes {} --coherence {} --randomness {}{}",
                                               o.width, o.height, options.seed, o.tileable ? " --tileable" : "",
-                                              options.passes, options.kappa, fmt::join(options.randomness, ","),
+                                              fmt::join(options.passes, ","), options.finest_passes, options.kappa,
+                                              fmt::join(options.randomness, ","),
                                               o.exemplar_tiles == synth::Tiling::Auto       ? ""
                                               : o.exemplar_tiles == synth::Tiling::Toroidal ? " --exemplar-tiles yes"
                                                                                              : " --exemplar-tiles no")},
