@@ -31,6 +31,7 @@ struct SynthCliOptions {
   float kappa = 8.0f;
   int finest_passes = 1;
   bool tileable = false;
+  std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
   std::string coords;
   std::string jitter_map;
@@ -279,6 +280,9 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   outputs.colour = o.output;
   outputs.coords = o.coords;
   outputs.bits = o.bits;
+  if (o.blend_seams != "on" && o.blend_seams != "off")
+    throw UsageError(fmt::format("--blend-seams '{}' must be on or off", o.blend_seams));
+  outputs.blend_seams = o.blend_seams == "on";
   struct MapArg {
     std::string kind, in, out;
   };
@@ -339,6 +343,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
+                {"blend_seams", outputs.blend_seams},
                 {"coords", o.coords},
                 {"jitter_map", o.jitter_map},
                 {"pastes", o.pastes},
@@ -407,6 +412,10 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
                   "plane, blended at its border; repeatable")
       ->allow_extra_args(false);
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
+  cmd->add_option("--blend-seams", o->blend_seams,
+                  "on|off: average the colour (and --apply maps) across the joins between copied patches; "
+                  "the coordinates (--coords) stay exact and inside a patch the pixels are exact copies")
+      ->capture_default_str();
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();
   cmd->add_option("--coords", o->coords, "Also write the exemplar coordinate map (.exr: R = x, G = y in pixels; with --graph B = the exemplar index)");

@@ -141,6 +141,105 @@ void check_folder(const fs::path& p) {
   }
 }
 
+// Seam blending: for every pixel of the inner w x rows region of the padded coordinates P (pw wide),
+// the 9 texels its 3x3 neighbours d predict, E[S(p + d) - d], in the order of d (row-major, centre
+// 4th); -1 where the prediction leaves a bounded exemplar.
+void seam_predictions(const std::vector<int32_t>& P, int pw, int w, int rows, int ew, int eh, bool toroidal,
+                      std::vector<int32_t>& out) {
+  out.resize(static_cast<size_t>(w) * rows * 9);
+  for (int y = 0; y < rows; ++y) {
+    for (int x = 0; x < w; ++x) {
+      int32_t* pred = &out[(static_cast<size_t>(y) * w + x) * 9];
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const size_t k = static_cast<size_t>(y + 1 + dy) * pw + (x + 1 + dx);
+          int ux = P[2 * k] - dx, uy = P[2 * k + 1] - dy;
+          if (toroidal) {
+            ux = (ux + ew) % ew;
+            uy = (uy + eh) % eh;
+          } else if (ux < 0 || uy < 0 || ux >= ew || uy >= eh) {
+            *pred++ = -1;
+            continue;
+          }
+          *pred++ = uy * ew + ux;
+        }
+      }
+    }
+  }
+}
+
+// The weighted mean of the predicted texels in the palette's own encoding (codes for 8/16 bit,
+// linear floats for EXR), rounded to the nearest code; normals are averaged as vectors (decoded
+// from the sRGB-encoded (n + 1) / 2 like the matching does) and renormalised. Inside a patch all
+// predictions are one texel and the result is that texel's bytes.
+void blend_texels(const Palette& pal, bool normal, const std::vector<int32_t>& predictions, size_t n,
+                  int centre_weight, std::vector<unsigned char>& out) {
+  const size_t tb = pal.texel_bytes;
+  const bool wide = pal.type == OIIO::TypeDesc::UINT16, flt = pal.type == OIIO::TypeDesc::FLOAT;
+  const double levels = wide ? 65535.0 : 255.0;
+  auto value = [&](int32_t texel, int c) -> double {  // the texel's channel in the palette's encoding
+    const unsigned char* b = &pal.bytes[static_cast<size_t>(texel) * tb];
+    if (flt) {
+      float f;
+      std::memcpy(&f, b + 4 * c, 4);
+      return f;
+    }
+    if (wide) {
+      uint16_t v;
+      std::memcpy(&v, b + 2 * c, 2);
+      return v;
+    }
+    return b[c];
+  };
+  auto to_unit = [&](double v) {  // palette value -> sRGB-encoded [0, 1]
+    return flt ? static_cast<double>(linear_to_srgb(std::clamp(static_cast<float>(v), 0.0f, 1.0f))) : v / levels;
+  };
+  auto from_unit = [&](double u) {  // sRGB-encoded [0, 1] -> palette value
+    return flt ? static_cast<double>(srgb_to_linear(static_cast<float>(u))) : u * levels;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t* pred = &predictions[i * 9];
+    unsigned char* dst = &out[i * tb];
+    bool same = true;
+    for (int k = 0; k < 9; ++k) same = same && (pred[k] < 0 || pred[k] == pred[4]);
+    if (same) {  // inside a patch: a verbatim copy
+      std::memcpy(dst, &pal.bytes[static_cast<size_t>(pred[4]) * tb], tb);
+      continue;
+    }
+    double sum[3] = {0, 0, 0}, weight = 0;
+    for (int k = 0; k < 9; ++k) {
+      if (pred[k] < 0) continue;
+      const double wk = k == 4 ? centre_weight : 1;
+      weight += wk;
+      for (int c = 0; c < 3; ++c) {
+        const double v = value(pred[k], c);
+        sum[c] += wk * (normal ? 2.0 * to_unit(v) - 1.0 : v);
+      }
+    }
+    double res[3];
+    if (normal) {
+      const double len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+      for (int c = 0; c < 3; ++c) {
+        const double nc = len > 0 ? sum[c] / len : (c == 2 ? 1.0 : 0.0);
+        res[c] = from_unit(std::clamp((nc + 1.0) / 2.0, 0.0, 1.0));
+      }
+    } else {
+      for (int c = 0; c < 3; ++c) res[c] = sum[c] / weight;
+    }
+    for (int c = 0; c < 3; ++c) {
+      if (flt) {
+        const float f = static_cast<float>(res[c]);
+        std::memcpy(dst + 4 * c, &f, 4);
+      } else if (wide) {
+        const uint16_t v = static_cast<uint16_t>(std::clamp(std::lround(res[c]), 0L, 65535L));
+        std::memcpy(dst + 2 * c, &v, 2);
+      } else {
+        dst[c] = static_cast<unsigned char>(std::clamp(std::lround(res[c]), 0L, 255L));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void check_outputs(const RenderOutputs& o, const Exemplar& ex) {
@@ -177,17 +276,19 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
   struct Target {
     std::unique_ptr<StripFile> file;
     Palette palette;
+    bool normal = false;
   };
   std::vector<Target> targets;
-  auto add = [&](const fs::path& path, const Image& src) {
+  auto add = [&](const fs::path& path, const Image& src, bool normal) {
     const OIIO::TypeDesc t = file_type(path, o.bits);
     Target tg;
     tg.palette = make_palette(src, t);
+    tg.normal = normal;
     tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == OIIO::TypeDesc::HALF);
     targets.push_back(std::move(tg));
   };
-  add(o.colour, ex.colour);
-  for (size_t i = 0; i < o.maps.size(); ++i) add(o.maps[i], ex.maps[i].image);
+  add(o.colour, ex.colour, false);
+  for (size_t i = 0; i < o.maps.size(); ++i) add(o.maps[i], ex.maps[i].image, ex.maps[i].kind == MapKind::Normal);
   std::unique_ptr<StripFile> coords;
   if (!o.coords.empty())
     coords = std::make_unique<StripFile>(o.coords, win.width, win.height, OIIO::TypeDesc::FLOAT, true);
@@ -197,18 +298,34 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
       static_cast<int>(std::clamp<size_t>(max_strip_pixels / static_cast<size_t>(win.width), 1, win.height));
   std::vector<unsigned char> buffer;
   std::vector<float> coord_rows;
+  std::vector<int32_t> S, predictions;
   for (int y0 = 0; y0 < win.height; y0 += rows_per_strip) {
     const int rows = std::min(rows_per_strip, win.height - y0);
-    const Window strip{win.x, win.y + y0, win.width, rows};
-    const std::vector<int32_t> S = synth.synthesise(strip, options);
     const size_t n = static_cast<size_t>(win.width) * rows;
+    if (o.blend_seams) {
+      // One pixel more on every side (exact by spatial determinism; a tileable plane wraps by itself).
+      const Window strip{win.x - 1, win.y + y0 - 1, win.width + 2, rows + 2};
+      const std::vector<int32_t> P = synth.synthesise(strip, options);
+      S.resize(2 * n);
+      for (int y = 0; y < rows; ++y)
+        std::memcpy(&S[2 * static_cast<size_t>(y) * win.width], &P[2 * ((y + 1) * static_cast<size_t>(strip.width) + 1)],
+                    2 * sizeof(int32_t) * win.width);
+      seam_predictions(P, strip.width, win.width, rows, ex.width(), ex.height(), synth.analysis().toroidal,
+                       predictions);
+    } else {
+      S = synth.synthesise(Window{win.x, win.y + y0, win.width, rows}, options);
+    }
     stats.peak_strip_pixels = std::max(stats.peak_strip_pixels, n);
     for (auto& t : targets) {
       buffer.resize(n * t.palette.texel_bytes);
-      for (size_t i = 0; i < n; ++i) {
-        const size_t texel = static_cast<size_t>(S[2 * i + 1]) * ex.width() + S[2 * i];
-        std::memcpy(&buffer[i * t.palette.texel_bytes], &t.palette.bytes[texel * t.palette.texel_bytes],
-                    t.palette.texel_bytes);
+      if (o.blend_seams) {
+        blend_texels(t.palette, t.normal, predictions, n, o.blend_centre_weight, buffer);
+      } else {
+        for (size_t i = 0; i < n; ++i) {
+          const size_t texel = static_cast<size_t>(S[2 * i + 1]) * ex.width() + S[2 * i];
+          std::memcpy(&buffer[i * t.palette.texel_bytes], &t.palette.bytes[texel * t.palette.texel_bytes],
+                      t.palette.texel_bytes);
+        }
       }
       t.file->write(y0, rows, t.palette.type, buffer.data());
     }

@@ -163,6 +163,39 @@ TEST(SynthCli, TileableOutputRepeatsSeamlessly) {
   EXPECT_TRUE(same_file(dir / "tile.png", dir / "shift.png"));
 }
 
+// --blend-seams (default on) averages the colour across patch joins only: a plain tiling (zero
+// randomness on a tiling exemplar) is one patch and stays an exact copy; blended windows side by
+// side equal the halves of the whole region, byte for byte; blending changes some pixels otherwise.
+TEST(SynthCli, SeamBlendingKeepsPatchesExactAndWindowsStitched) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  auto synth = [&](const std::string& out, const std::string& args) {
+    const auto r = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / out).string() + "' " + args,
+                               dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  };
+  synth("t_on.png", "--size 96 --randomness 0 --exemplar-tiles yes --blend-seams on");
+  synth("t_off.png", "--size 96 --randomness 0 --exemplar-tiles yes --blend-seams off");
+  int w, h, c;
+  std::string f;
+  EXPECT_TRUE(raw_pixels(dir / "t_on.png", w, h, c, f) == raw_pixels(dir / "t_off.png", w, h, c, f));
+  synth("on.png", "--window -300,5000,96,64 --seed 3");
+  synth("off.png", "--window -300,5000,96,64 --seed 3 --blend-seams off");
+  const auto whole = raw_pixels(dir / "on.png", w, h, c, f);
+  ASSERT_EQ(w, 96);
+  EXPECT_FALSE(whole == raw_pixels(dir / "off.png", w, h, c, f));
+  for (int k = 0; k < 2; ++k) {
+    synth("h" + std::to_string(k) + ".png", "--seed 3 --window " + std::to_string(-300 + 48 * k) + ",5000,48,64");
+    int hw, hh, hc;
+    const auto half = raw_pixels(dir / ("h" + std::to_string(k) + ".png"), hw, hh, hc, f);
+    ASSERT_EQ(hw, 48);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 48 * c; ++x)
+        ASSERT_EQ(half[static_cast<size_t>(y) * 48 * c + x], whole[static_cast<size_t>(y) * 96 * c + 48 * k * c + x])
+            << k << " " << x << "," << y;
+  }
+}
+
 TEST(SynthCli, BadInputIsOneLineAndLeavesNoFile) {
   TempDir dir;
   const auto ex = make_exemplar(dir);
