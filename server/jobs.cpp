@@ -209,7 +209,8 @@ nlohmann::json SynthJobOptions::to_json() const {
                       {"exemplar_tiles", exemplar_tiles == synth::Tiling::Auto       ? "auto"
                                          : exemplar_tiles == synth::Tiling::Toroidal ? "yes"
                                                                                       : "no"},
-                      {"downscale", downscale}};
+                      {"downscale", downscale},
+                      {"blend_seams", blend_seams}};
   if (randomness_given) {
     j["randomness"] = nlohmann::json::array();
     for (float r : synth.randomness) j["randomness"].push_back(decimal(r));
@@ -221,12 +222,12 @@ nlohmann::json SynthJobOptions::to_json() const {
 SynthJobOptions synth_options_from_json(const nlohmann::json& j, int max_size) {
   if (!j.is_object()) throw UsageError("synth options must be a JSON object", "send e.g. {\"size\": 512, \"seed\": 3}");
   static const std::vector<std::string> known = {"size",     "tileable",       "seed",     "randomness", "randomness_scale",
-                                                 "passes",   "finest_passes",  "coherence",      "exemplar_tiles", "downscale", "from_job"};
+                                                 "passes",   "finest_passes",  "coherence",      "exemplar_tiles", "downscale", "blend_seams", "from_job"};
   for (const auto& [k, v] : j.items())
     if (std::find(known.begin(), known.end(), k) == known.end())
       throw UsageError("unknown synth option '" + k + "'",
                        "known: size, tileable, seed, randomness, randomness_scale, passes, finest_passes, coherence, exemplar_tiles, "
-                       "downscale, from_job");
+                       "downscale, blend_seams, from_job");
   SynthJobOptions o;
   if (j.contains("size") && !j["size"].is_null()) {
     const auto s = parse_synth_size(j["size"], max_size);
@@ -242,6 +243,7 @@ SynthJobOptions synth_options_from_json(const nlohmann::json& j, int max_size) {
   };
   o.tileable = flag("tileable", false);
   o.downscale = flag("downscale", false);
+  o.blend_seams = flag("blend_seams", true);
   o.synth.seed = static_cast<uint32_t>(field<int64_t>(j, "seed", 1, 0, 0xffffffffLL));
   // Defaults: the library's (= the command line's, so the result equals `proctex synth`'s).
   if (j.contains("passes") && !j["passes"].is_null()) {
@@ -719,6 +721,7 @@ nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
   synth::Synthesizer synthesizer(analysis);
   synth::RenderOutputs outputs;
   outputs.colour = dir / "synth.png";
+  outputs.blend_seams = o.blend_seams;
   const synth::Window window{0, 0, o.width, o.height};
   // Strips of at most 1 M pixels: progress and a cancel between strips; the output does not depend
   // on the strips (spatial determinism).
@@ -752,10 +755,10 @@ nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
                       {"strips", stats.strips},
                       {"device", ocl::Runtime::instance().device().name},
                       {"command", fmt::format("proctex synth exemplar.png -o synth.png --size {}x{} --seed {}{} --passes {} "
-                                              "--finest-passes {} --coherence {} --randomness {}{}",
+                                              "--finest-passes {} --coherence {} --randomness {} --blend-seams {}{}",
                                               o.width, o.height, options.seed, o.tileable ? " --tileable" : "",
                                               fmt::join(options.passes, ","), options.finest_passes, options.kappa,
-                                              fmt::join(options.randomness, ","),
+                                              fmt::join(options.randomness, ","), o.blend_seams ? "on" : "off",
                                               o.exemplar_tiles == synth::Tiling::Auto       ? ""
                                               : o.exemplar_tiles == synth::Tiling::Toroidal ? " --exemplar-tiles yes"
                                                                                              : " --exemplar-tiles no")},

@@ -113,6 +113,7 @@ struct SynthJobOptions {
   double randomness_scale = 1.0;   // multiplies every level's randomness
   synth::Tiling exemplar_tiles = synth::Tiling::Auto;
   bool downscale = false;          // exemplars over 512 px a side are scaled down to fit
+  bool blend_seams = true;         // as proctex synth --blend-seams (default on)
   std::string from_job;            // reuse the exemplar (input) of an earlier job
 
   nlohmann::json to_json() const;
