@@ -1,4 +1,5 @@
 #include "synth/analysis.h"
+#include "synth/plane.h"
 
 #include <algorithm>
 #include <atomic>
@@ -20,31 +21,10 @@
 namespace proctex::synth {
 namespace {
 
-inline int wrap(int x, int n) {
-  const int r = x % n;
-  return r < 0 ? r + n : r;
-}
-
-// Mirror without repeating the edge texel (period 2n - 2): no wrap-around across the border.
-inline int reflect(int x, int n) {
-  if (n == 1) return 0;
-  const int p = 2 * n - 2;
-  x = wrap(x, p);
-  return x >= n ? p - x : x;
-}
-
-struct Sampler {
-  int w, h;
-  bool toroidal;
-  int ix(int x) const { return toroidal ? wrap(x, w) : reflect(x, w); }
-  int iy(int y) const { return toroidal ? wrap(y, h) : reflect(y, h); }
-};
-
-int level_count(int w, int h) {
-  int L = 0;
-  while ((1 << L) < std::max(w, h)) ++L;
-  return L;
-}
+using detail::level_count;
+using detail::reflect;
+using detail::Sampler;
+using detail::wrap;
 
 // Gaussian stack by repeated a-trous binomial filtering: level l = level l+1 filtered with
 // [1 4 6 4 1] / 16 at spacing h_{l+1}, separably. Returns levels 0..L, each planar like `ch`.

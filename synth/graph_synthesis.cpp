@@ -18,6 +18,7 @@
 #include "kernels/buffers.h"
 #include "kernels/runtime.h"
 #include "synth/analysis.h"
+#include "synth/plane.h"
 #include "synth/exemplar.h"
 
 namespace proctex::synth {
@@ -32,28 +33,10 @@ constexpr int kColourTaps = 25;
 constexpr int kAppIn = kColourTaps * 3;  // 75
 constexpr int kLinkBias = 4;  // a continuing link may be 4/3 as far as the best (patch_match)
 
-inline int wrap(int x, int n) {
-  const int r = x % n;
-  return r < 0 ? r + n : r;
-}
-inline int reflect(int x, int n) {
-  if (n == 1) return 0;
-  const int p = 2 * n - 2;
-  x = wrap(x, p);
-  return x >= n ? p - x : x;
-}
-struct Sampler {
-  int w, h;
-  bool toroidal;
-  int ix(int x) const { return toroidal ? wrap(x, w) : reflect(x, w); }
-  int iy(int y) const { return toroidal ? wrap(y, h) : reflect(y, h); }
-};
-
-int level_count(int w, int h) {
-  int L = 0;
-  while ((1 << L) < std::max(w, h)) ++L;
-  return L;
-}
+using detail::level_count;
+using detail::reflect;
+using detail::Sampler;
+using detail::wrap;
 
 template <typename Fn>
 void parallel_for(int count, Fn&& fn) {
@@ -363,19 +346,11 @@ struct Region {
   int w = 0, h = 0;
 };
 
-constexpr int64_t kMaxCoordinate = int64_t(1) << 60;
-constexpr int kLocalX = 16, kLocalY = 4;
+using detail::kMaxCoordinate;
 
 template <typename... Args>
 void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
-  ocl::with_cl_errors("launching a graph synthesis kernel", [&] {
-    cl_uint index = 0;
-    (kernel.setArg(index++, args), ...);
-    const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
-    ocl::Runtime::instance().queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(rx, ry),
-                                                          cl::NDRange(kLocalX, kLocalY));
-    return 0;
-  });
+  detail::launch2d("launching a graph synthesis kernel", kernel, gx, gy, args...);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "synth/synthesis.h"
+#include "synth/plane.h"
 
 #include <algorithm>
 #include <cmath>
@@ -136,23 +137,11 @@ int ctz64(int64_t v) {
   return n;
 }
 
-constexpr int64_t kMaxCoordinate = int64_t(1) << 60;
-
-// A fixed work-group size: PoCL compiles a kernel once per local size, and with the driver's
-// choice every new window size cost a compilation (~0.4 s CPU). Global sizes are rounded up; the
-// kernels ignore the extra items.
-constexpr int kLocalX = 16, kLocalY = 4;
+using detail::kMaxCoordinate;
 
 template <typename... Args>
 void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
-  ocl::with_cl_errors("launching a synthesis kernel", [&] {
-    cl_uint index = 0;
-    (kernel.setArg(index++, args), ...);
-    const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
-    ocl::Runtime::instance().queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(rx, ry),
-                                                          cl::NDRange(kLocalX, kLocalY));
-    return 0;
-  });
+  detail::launch2d("launching a synthesis kernel", kernel, gx, gy, args...);
 }
 
 }  // namespace
