@@ -11,8 +11,9 @@
 // not be aligned with the shader's origin. Not a texture similarity for stochastic textures (two
 // seeds of noise differ everywhere in it): search/ uses it only to polish a deterministic match.
 //
-// Features: the analysis planes L*/100, a*/100, b*/100 area-averaged to kSize x kSize, FFTW r2c,
-// sqrt(|F| / kSize^2) (compressive, stable near the many zero coefficients of a clean pattern; the
+// Features: the analysis planes L*/100, a*/100, b*/100 area-averaged to size x size (default kSize;
+// a finer pattern needs a larger size: area-averaging 44 stripes to 64 px leaves nothing), FFTW r2c,
+// sqrt(|F| / size^2) (compressive, stable near the many zero coefficients of a clean pattern; the
 // DC term is the plane's mean, so the colour counts). Distance: RMS difference.
 #include "metrics/metric.h"
 
@@ -21,16 +22,25 @@ namespace proctex::metrics {
 class MagnitudeMetric final : public Metric {
  public:
   static constexpr int kSize = 64;
+  // `blur`: Gaussian sigma in frequency bins applied to the magnitudes (0: none). A blurred
+  // magnitude lets a search see a peak that is a few bins off (a stripe count or an angle not yet
+  // right): the exact one is flat there. For coarse-to-fine searches only.
+  explicit MagnitudeMetric(int size = kSize, double blur = 0.0) : size_(size), blur_(blur) {}
+  int size() const { return size_; }
 
   std::string id() const override { return "magnitude"; }
   int version() const override { return 1; }
   std::string summary() const override {
     return "full 2-D Fourier magnitude of the CIELAB planes (exact patterns, phase ignored)";
   }
-  std::size_t feature_size() const override { return 3 * kSize * (kSize / 2 + 1); }
+  std::size_t feature_size() const override { return 3 * size_t(size_) * (size_ / 2 + 1); }
   std::vector<float> compute(const Analysis& analysis) const override;
   double distance(std::span<const float> a, std::span<const float> b) const override;
   double scale() const override { return 0.02; }
+
+ private:
+  int size_;
+  double blur_;
 };
 
 }  // namespace proctex::metrics

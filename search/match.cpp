@@ -101,14 +101,18 @@ std::vector<catalog::ShaderSummary> usable_shaders(catalog::Store& store, const 
   return out;
 }
 
-// The starting points given a short refinement (the race). Half of the lanes go to the best
+// The starting points given a short refinement (the race). First the best screened start of each
+// of the `selection_lanes` most likely shaders of the selection (`by_selection`, most likely first):
+// without a lane the selection's choice could not win however sure it was (the report split lost 6
+// right answers that way, docs/match-evaluation.md). Then half of the lanes go to the best
 // screened start of each of the structurally closest shaders (`by_structure`, best first): the
 // structural scan uses full-resolution features and ranks the target's shader first more often
 // than the 64 px screening does (docs/match-evaluation.md), while screening sees colour. The rest
 // go to the best screened starts overall. At most `lanes / 4` (at least 1) starts per shader, so
 // one shader's near-duplicate samples do not crowd out a second plausible shader; among
 // near-equal similarities smoother samples go first (thesis 4.4: faster, better refinement).
-std::vector<Start> choose_race(std::vector<Start> screened, const std::vector<std::string>& by_structure, int lanes) {
+std::vector<Start> choose_race(std::vector<Start> screened, const std::vector<std::string>& by_selection,
+                               int selection_lanes, const std::vector<std::string>& by_structure, int lanes) {
   std::stable_sort(screened.begin(), screened.end(), [](const Start& a, const Start& b) {
     if (std::fabs(a.similarity - b.similarity) > 0.01) return a.similarity > b.similarity;
     return a.sample->smoothness < b.sample->smoothness;
@@ -122,14 +126,17 @@ std::vector<Start> choose_race(std::vector<Start> screened, const std::vector<st
     ++used[screened[i].shader];
     out.push_back(screened[i]);
   };
-  for (const auto& shader : by_structure) {
-    if (static_cast<int>(out.size()) >= lanes / 2) break;
+  auto take_best_of = [&](const std::string& shader) {
+    if (used[shader] > 0) return;
     for (size_t i = 0; i < screened.size(); ++i)
       if (screened[i].shader == shader) {
         take(i);
-        break;
+        return;
       }
-  }
+  };
+  for (size_t r = 0; r < by_selection.size() && static_cast<int>(r) < selection_lanes; ++r)
+    take_best_of(by_selection[r]);
+  for (size_t r = 0; r < by_structure.size() && static_cast<int>(r) < lanes / 2; ++r) take_best_of(by_structure[r]);
   for (size_t i = 0; i < screened.size() && static_cast<int>(out.size()) < lanes; ++i)
     if (!taken[i] && used[screened[i].shader] < per_shader) take(i);
   return out;
@@ -151,6 +158,12 @@ std::vector<float> apply_fixed(const ShaderDecl& decl, const std::vector<float>&
 // (tilings, shapes, clean bricks; a faint seed-driven grain is allowed). Mean |difference| over
 // a 64 px render, linear RGB.
 constexpr double kPatternPeakiness = 0.7;
+// The polish of a deterministic pattern: the blurred-magnitude stage's share of the renders, its
+// blur (frequency bins at the refinement resolution), and the discrete parameters enumerated
+// whole (stripes up to 64, grid cells up to 32: a local search cannot count them).
+constexpr double kPolishCoarseShare = 0.4;
+constexpr double kPolishBlurBins = 2.0;
+constexpr int kPolishSweepLevels = 64;
 
 bool nearly_deterministic(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed) {
   RenderSettings s;
@@ -411,7 +424,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   std::stable_sort(structural_order.begin(), structural_order.end(),
                    [&](int a, int b) { return scans[a].best_full > scans[b].best_full; });
   for (int c : structural_order) by_structure.push_back(scans[c].catalogue.shader);
-  for (auto& st : choose_race(screened, by_structure, race)) {
+  std::vector<std::string> by_selection;
+  for (int c : chosen) by_selection.push_back(scans[c].catalogue.shader);
+  for (auto& st : choose_race(screened, by_selection, o.selection_lanes, by_structure, race)) {
     Lane lane;
     lane.decl = &library.get(st.shader);
     std::vector<std::string> pinned;
@@ -533,9 +548,14 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const auto t_final = Clock::now();
   RenderSettings full;
   full.width = full.height = o.resolution;
-  static const metrics::MagnitudeMetric magnitude;
+  // Peakiness on the 64 px magnitude (its threshold was set there); the polish compares magnitudes
+  // at the refinement's whole resolution, so fine patterns (44 stripes, thin grid lines) stay visible.
+  static const metrics::MagnitudeMetric peak_magnitude;
+  const double peakiness = spectral_peakiness(peak_magnitude.features(target, o.coarse_resolution));
+  const metrics::MagnitudeMetric magnitude(o.coarse_resolution);
   const metrics::Features target_magnitude = magnitude.features(target, o.coarse_resolution);
-  const double peakiness = spectral_peakiness(target_magnitude);
+  const metrics::MagnitudeMetric blurred_magnitude(o.coarse_resolution, kPolishBlurBins);
+  const metrics::Features target_blurred = blurred_magnitude.features(target, o.coarse_resolution);
   const bool pattern = peakiness >= kPatternPeakiness;
   struct Candidate {
     const Refined* from;
@@ -598,8 +618,26 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     };
     RefineOptions options = o.refine;
     options.max_evaluations = polish_budget;
-    const auto r = polish_pattern(objective, space.to_unit(packed),
-                                  lane_end_units(space, *base.decl, lane_ends, base.packed, o.fixed), options, polish);
+    options.sweep_levels = kPolishSweepLevels;
+    std::vector<double> own = space.to_unit(packed);
+    auto lane_points = lane_end_units(space, *base.decl, lane_ends, base.packed, o.fixed);
+    // A deterministic shader first meets the blurred magnitude: its search reaches a stripe count
+    // or an angle a few bins off, where the exact magnitude is flat. Its end point then leads the
+    // exact polish, which still tries the shader's own point.
+    if (polish["deterministic"]) {
+      Objective coarse(space, target_blurred, blurred_magnitude, renderer, base.seed, o.coarse_resolution);
+      coarse.set_budget({std::max<long>(1, long(polish_budget * kPolishCoarseShare)), 0.0});
+      if (stop && *stop) coarse.stop();
+      RefineOptions coarse_options = options;
+      coarse_options.max_evaluations = std::max<long>(1, long(polish_budget * kPolishCoarseShare));
+      nlohmann::json coarse_report;
+      const auto c = polish_pattern(coarse, own, lane_points, coarse_options, coarse_report);
+      evaluations += coarse.evaluations();
+      polish["coarse"] = {{"evaluations", coarse.evaluations()}, {"similarity", c.similarity}};
+      lane_points.insert(lane_points.begin(), own);
+      own = c.unit;
+    }
+    const auto r = polish_pattern(objective, own, lane_points, options, polish);
     evaluations += objective.evaluations();
     // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form
     // colour fit (colour_fit.h) then sets the free colours from the target's colour statistics.

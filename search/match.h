@@ -60,6 +60,7 @@ struct MatchOptions {
   int screen = 4;                     // best catalogue samples per candidate shader screened
   int screen_resolution = 64;         // analysis resolution of the screening (the race tells near ones apart)
   int race = 12;                      // starts given a short refinement (about 1/5 of the evaluations)
+  int selection_lanes = 3;            // race lanes reserved for the selection's most likely shaders
   int starts = 3;                     // of those, the best k are refined to the end
   int resolution = 256;               // analysis resolution of the result (catalogue features)
   int coarse_resolution = 128;        // analysis resolution during refinement
@@ -68,7 +69,7 @@ struct MatchOptions {
                                       // screening always completes; it is what gives a result)
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
   double selection_weight = kSelectionWeight;   // lambda of the final choice (see kSelectionWeight)
-  long polish_evaluations = 300;      // exact polish of a deterministic pattern (0: off; metrics/magnitude.h)
+  long polish_evaluations = 400;      // exact polish of a deterministic pattern (0: off; metrics/magnitude.h)
 };
 
 struct Candidate {
