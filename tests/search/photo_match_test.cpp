@@ -31,16 +31,17 @@ const fs::path& photo_catalogue() {
   return path;
 }
 
-MatchResult match_photo(const std::string& name) {
+MatchResult match_photo(const std::string& name, long evaluations) {
   const Image photo = prepare_target(fs::path(PROCTEX_SHARED_DIR) / "textures" / name, "");
   catalog::Store store(photo_catalogue(), catalog::Store::Access::Read);
   MatchOptions o;
-  o.refine.max_evaluations = 150;  // the material is chosen before the refinement; fewer renders
+  o.refine.max_evaluations = evaluations;
   return match(photo, store, o);
 }
 
-void expect_material(const std::string& photo, const std::set<std::string>& accepted) {
-  const MatchResult r = match_photo(photo);
+// Mostly the material is chosen before the refinement, so fewer renders than the CLI's 300 do.
+void expect_material(const std::string& photo, const std::set<std::string>& accepted, long evaluations = 150) {
+  const MatchResult r = match_photo(photo, evaluations);
   EXPECT_TRUE(accepted.count(r.spec.shader)) << photo << " matched as " << r.spec.shader << ": " << r.to_json().dump();
   // Whatever the verdict, it is one of the three, and "good" only for the right material.
   EXPECT_TRUE(r.verdict == "good" || r.verdict == "approximate" || r.verdict == "no-match") << r.verdict;
@@ -51,11 +52,15 @@ void expect_material(const std::string& photo, const std::set<std::string>& acce
 
 TEST(PhotoMatch, BrickPhotoIsBricks) { expect_material("brick.png", {"bricks"}); }
 TEST(PhotoMatch, GrassPhotoIsGrass) { expect_material("grass.png", {"grass"}); }
+// With the CLI's effort: the selection is split between grass and gravel (0.46 / 0.38 here) and
+// the gravel lane needs its whole refinement to show crushed stone (S 0.62 with 150 renders, level
+// with grass).
 TEST(PhotoMatch, GravelPhotoIsGravelOrStones) {
-  GTEST_SKIP() << "known weakness (issue 12 open): the selection gives the gravel photo grass 0.46 / gravel 0.38 "
-                  "and the refined gravel lane reaches only S 0.49 against grass 0.63, so it is matched as grass "
-                  "(verdict approximate, not good). Remove this skip when it passes.";
-  expect_material("gravel.png", {"gravel", "stones"});
+  GTEST_SKIP() << "known weakness (issue 12 open): with the crushed-stone gravel shader the CLI matches the photo "
+                  "as gravel (S 0.71 against the 48-sample catalogue), but against this test's 24-sample catalogue "
+                  "the gravel lane ends at S 0.621 against grass 0.626 and the selection prefers grass (0.46 / 0.38). "
+                  "Remove this skip when it passes.";
+  expect_material("gravel.png", {"gravel", "stones"}, 300);
 }
 TEST(PhotoMatch, HubblePhotoIsAStarfield) { expect_material("hubble_deep_field.jpg", {"starfield"}); }
 
