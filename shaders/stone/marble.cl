@@ -1,10 +1,12 @@
-// @shader "Marble: turbulent veins (sine of a coordinate plus turbulence) over a mottled base"
+// @shader "Marble: turbulent banded veins and branching crack-like veins over a clouded, mottled base"
 // @param float veins      = 3     [0.5, 16] log       "Vein bands across the texture"
 // @param float angle      = 30    [0, 180]            "Overall vein direction in degrees"
 // @param float turbulence = 2.5   [0, 5]              "How strongly turbulence distorts the veins"
 // @param float scale      = 3     [1, 8] log         "Feature size of the turbulence (noise frequency)"
 // @param float vein_width = 0.15  [0.02, 0.6] log     "Width of the dark veins"
-// @param float mottle     = 0.3   [0, 1]              "Cloudy variation of the base colour"
+// @param float mottle     = 0.3   [0, 1]              "Fine mottled variation of the base colour"
+// @param float network    = 0.3   [0, 1]              "Branching, crack-like veins (0: only the banded veins)"
+// @param float clouds     = 0.2   [0, 1]              "Large cloudy patches tinted towards the vein colour"
 // @param color base_color = (0.80, 0.78, 0.74)        "Base stone colour (linear RGB)"
 // @param color vein_color = (0.18, 0.18, 0.20)        "Vein colour (linear RGB)"
 // @param int   octaves    = 6     [1, 8] fixed        "Turbulence octaves"
@@ -31,7 +33,17 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
     vein += fmax(a1, a2);
   }
   vein /= (float)K;
+  // Branching veins: the zero set of a turbulence-warped signed noise - a network of thin cracks
+  // that fork and rejoin, as in most photographed marble (banded veins alone read as wood-like
+  // stripes). Thinner where the noise changes fast; filtered by the noise's slope per pixel.
+  const float2 pn = p * P.scale * 1.2f + 0.35f * P.turbulence * (float2)(t, -t);
+  const float n = pt_fbm(pn, fw * P.scale * 1.2f, 5, 2.0f, 0.55f, pt_subseed(seed, 3u));
+  const float wn = 1.5f * fw * P.scale * 1.2f;
+  const float crack = 1.0f - pt_aa_threshold(fabs(n), 0.12f * P.vein_width, 0.08f * P.vein_width, wn);
+  vein = fmax(vein * (1.0f - 0.7f * P.network), P.network * crack);
   const float m = pt_fbm(p * P.scale * 0.7f, fw * P.scale * 0.7f, 5, 2.0f, 0.5f, pt_subseed(seed, 2u));
-  const float3 base = P.base_color * (1.0f + P.mottle * 0.35f * m);
+  const float c = pt_fbm(p * P.scale * 0.3f, fw * P.scale * 0.3f, 4, 2.0f, 0.5f, pt_subseed(seed, 4u));
+  const float cloud = P.clouds * smoothstep(-0.15f, 0.45f, c);
+  const float3 base = mix(P.base_color, 0.4f * P.base_color + 0.6f * P.vein_color, cloud) * (1.0f + P.mottle * 0.35f * m);
   return pt_saturate3(mix(base, P.vein_color, vein));
 }
