@@ -1,12 +1,13 @@
 // @shader "Fallen leaves: overlapping pointed leaves of varied colour and orientation on the ground"
 // @param float density     = 8    [3, 30] log         "Leaf cells across the texture (two leaves per cell)"
-// @param float size        = 0.7  [0.3, 1.2]          "Leaf length, in cells"
+// @param float size        = 0.7  [0.3, 1.6]          "Leaf length, in cells (large: dense overlapping foliage)"
 // @param float elongation  = 2.2  [1.2, 4]            "Leaf length / width"
 // @param color color       = (0.45, 0.20, 0.03)       "Main leaf colour (linear RGB)"
 // @param color color2      = (0.50, 0.40, 0.05)       "Second leaf colour, mixed per leaf (linear RGB)"
 // @param color ground_color = (0.05, 0.04, 0.03)      "Ground colour between leaves (linear RGB)"
 // @param float variation   = 0.3  [0, 1]              "Leaf-to-leaf brightness variation"
 // @param float veins       = 0.5  [0, 1]              "Visibility of the midrib and side veins"
+// @param float shading     = 0.3  [0, 1]              "Light and shadow: leaves lit on one side, lower leaves darker (foliage, ivy)"
 
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float2 q = p * P.density;
@@ -44,6 +45,9 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
         const float mid = 1.0f - pt_filtered_pulse(-0.03f * hw, 0.03f * hw, l.x, w);
         const float side = pt_filtered_pulsetrain(0.12f, (l.y - 0.8f * fabs(l.x)) * (5.0f / hl), w * 5.0f / hl);
         lc *= 1.0f - P.veins * dv * (0.35f * (1.0f - mid) + 0.15f * side);
+        // Shading: each leaf curves away from its midrib (one half catches the light) and the
+        // lower ones lie in the upper ones' shade - what gives a hedge or ivy its depth.
+        lc *= 1.0f + P.shading * (0.45f * clamp(l.x / hw, -1.0f, 1.0f) - 0.6f * (1.0f - depth));
         // Shadow of the leaf's own rim onto the leaves below.
         col = mix(col * 0.7f, lc, cover) * cover + col * (1.0f - cover);
         if (cover > 0.5f) top = depth;
