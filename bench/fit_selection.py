@@ -85,6 +85,7 @@ class Data:
         self.S = np.fromfile(os.path.join(folder, "structural.f32"), dtype="<f4").reshape(
             len(self.photos), len(self.names)).astype(np.float64)
         self.alpha = 0.0
+        self.balance = False
         self.A = np.zeros((len(self.photos), len(self.names)))
         for i, p in enumerate(self.photos):
             for s in p["accepted"].split(","):
@@ -101,6 +102,15 @@ class Data:
         Y = np.eye(K)[self.y]
         PR = np.array([self.TZ[v] for i in photo_ids for v in self.views[i]]).reshape(-1, d)
         PA = np.array([self.A[i] for i in photo_ids for v in self.views[i]]).reshape(-1, K)
+        # --balance: every kind weighs the same in total (a photo weighs 1 / its kind's photo count,
+        # scaled to a mean of 1), so kinds with many photos do not dominate the photo term.
+        PW = np.ones(len(PR))
+        if self.balance and len(PR):
+            count = {}
+            for i in photo_ids:
+                count[self.photos[i]["kind"]] = count.get(self.photos[i]["kind"], 0) + 1
+            PW = np.array([1.0 / count[self.photos[i]["kind"]] for i in photo_ids for v in self.views[i]])
+            PW *= len(PW) / PW.sum()
         W = np.zeros((d, K))
         b = np.zeros(K)
         for _ in range(iterations):
@@ -110,7 +120,7 @@ class Data:
                 Q = softmax(PR @ W + b)
                 target = Q * PA
                 target /= target.sum(axis=1, keepdims=True) + 1e-12
-                Gp = (Q - target) * photo_weight / len(PR)
+                Gp = (Q - target) * (photo_weight * PW[:, None]) / len(PR)
                 gW += PR.T @ Gp
                 gb += Gp.sum(axis=0)
             W -= rate * (gW + l2 * W)
@@ -227,12 +237,14 @@ def main():
     ap.add_argument("--db", required=True, help="the catalogue the dump was made with")
     ap.add_argument("--l2", type=float, default=0.05)
     ap.add_argument("--photo-weight", type=float, default=0.5)
+    ap.add_argument("--balance", action="store_true", help="class-balanced photo weights (each kind weighs the same)")
     ap.add_argument("--precision", type=float, default=0.95, help="wanted precision of 'good'")
     ap.add_argument("--version", type=int, default=1)
     ap.add_argument("--alpha", type=float, default=None, help="structural weight (default: chosen, see above)")
     ap.add_argument("--write", default="", help="write the model as a C++ header")
     args = ap.parse_args()
     data = Data(args.folder, args.db)
+    data.balance = args.balance
     tune, report, synthetic = data.ids("tune"), data.ids("report"), data.ids("synthetic")
     W, b = data.train(tune, args.l2, args.photo_weight)
     folds = out_of_fold(data, tune, args.l2, args.photo_weight)
