@@ -29,7 +29,7 @@ if [[ -x "$build/bench/bench_match_eval" && -x "$build/cli/proctex" ]] && comman
   # fetched from Debian game-data packages once (~1.2 GB of downloads into $build/realset); the
   # catalogue is built (incrementally) at $PROCTEX_BENCH_CATALOG, default $build/bench-cat48.sqlite.
   echo "== $build/bench/bench_match_eval --real (report split of bench/realset/labels.json)"
-  python3 bench/realset/build.py --out "$build/realset"
+  python3 bench/realset/build.py --out "$build/realset" --split report
   cat48=${PROCTEX_BENCH_CATALOG:-$build/bench-cat48.sqlite}
   "$build/cli/proctex" catalog build --db "$cat48" --samples 48 --probes 0
   "$build/bench/bench_match_eval" --db "$cat48" --real bench/realset/labels.json --split report \

@@ -119,6 +119,7 @@ def main():
     ap.add_argument("--out", default="build/realset", help="cache and output folder")
     ap.add_argument("--force", action="store_true", help="rebuild every image")
     ap.add_argument("--only", nargs="*", help="build only these ids")
+    ap.add_argument("--split", choices=["tune", "report"], help="build only this split (make bench needs only report)")
     args = ap.parse_args()
 
     try:
@@ -128,6 +129,8 @@ def main():
     items = labels["images"]
     if args.only:
         items = [i for i in items if i["id"] in set(args.only)]
+    if args.split:
+        items = [i for i in items if i["split"] == args.split]
     out = args.out
     images = os.path.join(out, "images")
     os.makedirs(images, exist_ok=True)
@@ -178,7 +181,7 @@ def main():
                                 "crop": [x, y, side], "package_version": version}
         built += 1
         print(f"realset: [{n}/{len(items)}] {item['id']} {w}x{h} -> {side}px", file=sys.stderr)
-    if not args.only:  # drop images of items no longer in the labels
+    if not args.only and not args.split:  # drop images of items no longer in the labels
         ids = {i["id"] for i in items}
         for stale in [k for k in manifest if k not in ids]:
             manifest.pop(stale)
