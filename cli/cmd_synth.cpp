@@ -280,9 +280,18 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   outputs.colour = o.output;
   outputs.coords = o.coords;
   outputs.bits = o.bits;
-  if (o.blend_seams != "on" && o.blend_seams != "off")
-    throw UsageError(fmt::format("--blend-seams '{}' must be on or off", o.blend_seams));
-  outputs.blend_seams = o.blend_seams == "on";
+  if (o.blend_seams == "off") {
+    outputs.blend_seams = false;
+  } else if (o.blend_seams != "on") {
+    const std::string& b = o.blend_seams;
+    if (b.size() != 1 || b[0] < '1' || b[0] > '4')
+      throw UsageError(fmt::format("--blend-seams '{}' must be on, off or a width of 1..4 pixels", b),
+                       "e.g. --blend-seams 3 ramps across each join over 3 pixels on either side");
+    outputs.blend_seams = true;
+    outputs.blend_radius = b[0] - '0';
+  } else {
+    outputs.blend_seams = true;
+  }
   struct MapArg {
     std::string kind, in, out;
   };
@@ -344,6 +353,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
                 {"blend_seams", outputs.blend_seams},
+                {"blend_radius", outputs.blend_seams ? outputs.blend_radius : 0},
                 {"coords", o.coords},
                 {"jitter_map", o.jitter_map},
                 {"pastes", o.pastes},
@@ -413,8 +423,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
       ->allow_extra_args(false);
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--blend-seams", o->blend_seams,
-                  "on|off: average the colour (and --apply maps) across the joins between copied patches; "
-                  "the coordinates (--coords) stay exact and inside a patch the pixels are exact copies")
+                  "on|off|N: ramp the colour (and --apply maps) across the joins between copied patches over N "
+                  "pixels on either side (on = 3); the coordinates (--coords) stay exact and inside a patch "
+                  "the pixels are exact copies")
       ->capture_default_str();
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();

@@ -75,6 +75,25 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
+  // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
+  // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
+  // keep it. Only the pixels on a join between patches are matched; at the finer levels, where
+  // patches are large, that is a small share of the pixels.
+  {
+    const int2 s0 = S[(long)j * w + i];
+    int inside = 1;
+    for (int dy = -1; dy <= 1 && inside; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
+        const int2 c = S[(long)nj * w + ni];
+        int ex = s0.x + (ni - i) * spacing, ey = s0.y + (nj - j) * spacing;
+        if (toroidal) { ex = sy_wrap(ex, ew); ey = sy_wrap(ey, eh); }
+        if (c.x != ex || c.y != ey) { inside = 0; break; }
+      }
+    }
+    if (inside) return;
+  }
   const int tdx[9] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
   const int tdy[9] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
