@@ -207,10 +207,45 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
   auto from_unit = [&](double u) {  // sRGB-encoded [0, 1] -> palette value
     return flt ? static_cast<double>(srgb_to_linear(static_cast<float>(u))) : u * levels;
   };
+  // Fast path: a pixel whose whole window lies inside one patch (every pair of adjacent pixels in it
+  // continues the patch) copies its texel; the same result as predict() finding all predictions
+  // equal, without the (2R + 1)^2 predictions. `join` marks a padded pixel that does not continue
+  // the patch of its right or lower neighbour; `sum` is its summed-area table.
+  const int R = sb.radius, ph = rows + 2 * R;
+  auto continues = [&](size_t a, size_t b, int dx, int dy) {  // S[b] = S[a] + (dx, dy) in the exemplar
+    int ux = P[2 * b] - dx, uy = P[2 * b + 1] - dy;
+    if (sb.toroidal) {
+      ux = ux < 0 ? ux + sb.ew : ux >= sb.ew ? ux - sb.ew : ux;
+      uy = uy < 0 ? uy + sb.eh : uy >= sb.eh ? uy - sb.eh : uy;
+    } else if (ux < 0 || uy < 0 || ux >= sb.ew || uy >= sb.eh) {
+      return false;
+    }
+    return ux == P[2 * a] && uy == P[2 * a + 1];
+  };
+  std::vector<int32_t> sum(static_cast<size_t>(pw + 1) * (ph + 1), 0);
+  for (int y = 0; y < ph; ++y) {
+    int32_t row = 0;
+    for (int x = 0; x < pw; ++x) {
+      const size_t a = static_cast<size_t>(y) * pw + x;
+      const bool join = (x + 1 < pw && !continues(a, a + 1, 1, 0)) || (y + 1 < ph && !continues(a, a + pw, 0, 1));
+      row += join ? 1 : 0;
+      sum[static_cast<size_t>(y + 1) * (pw + 1) + x + 1] = sum[static_cast<size_t>(y) * (pw + 1) + x + 1] + row;
+    }
+  }
+  auto joins_in_window = [&](int x, int y) {  // inner (x, y): padded window [x, x + 2R] x [y, y + 2R]
+    const size_t x0 = x, x1 = x + 2 * R + 1, y0 = y, y1 = y + 2 * R + 1;
+    return sum[y1 * (pw + 1) + x1] - sum[y0 * (pw + 1) + x1] - sum[y1 * (pw + 1) + x0] + sum[y0 * (pw + 1) + x0];
+  };
   std::vector<int32_t> pred(sb.dx.size());
   for (int y = 0; y < rows; ++y) {
     for (int x = 0; x < w; ++x) {
       unsigned char* dst = &out[(static_cast<size_t>(y) * w + x) * tb];
+      if (joins_in_window(x, y) == 0) {
+        const size_t c = static_cast<size_t>(y + R) * pw + (x + R);
+        const size_t texel = static_cast<size_t>(P[2 * c + 1]) * sb.ew + P[2 * c];
+        std::memcpy(dst, &pal.bytes[texel * tb], tb);
+        continue;
+      }
       if (sb.predict(P, pw, x, y, pred.data())) {  // inside a patch: a verbatim copy
         std::memcpy(dst, &pal.bytes[static_cast<size_t>(pred[0]) * tb], tb);
         continue;
