@@ -236,6 +236,14 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
     const size_t x0 = x, x1 = x + 2 * R + 1, y0 = y, y1 = y + 2 * R + 1;
     return sum[y1 * (pw + 1) + x1] - sum[y0 * (pw + 1) + x1] - sum[y1 * (pw + 1) + x0] + sum[y0 * (pw + 1) + x0];
   };
+  // Every texel's channels as summed: the palette value, or the decoded normal component.
+  const size_t texels = pal.bytes.size() / tb;
+  std::vector<double> term(3 * texels);
+  for (size_t t = 0; t < texels; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const double v = value(static_cast<int32_t>(t), c);
+      term[3 * t + c] = normal ? 2.0 * to_unit(v) - 1.0 : v;
+    }
   std::vector<int32_t> pred(sb.dx.size());
   for (int y = 0; y < rows; ++y) {
     for (int x = 0; x < w; ++x) {
@@ -255,10 +263,8 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
         if (pred[k] < 0) continue;
         const double wk = sb.weight[k];
         weight += wk;
-        for (int c = 0; c < 3; ++c) {
-          const double v = value(pred[k], c);
-          sum[c] += wk * (normal ? 2.0 * to_unit(v) - 1.0 : v);
-        }
+        const double* v = &term[3 * static_cast<size_t>(pred[k])];
+        for (int c = 0; c < 3; ++c) sum[c] += wk * v[c];
       }
       double res[3];
       if (normal) {
