@@ -30,6 +30,7 @@ struct SynthCliOptions {
   std::string passes = "0,2";
   float kappa = 8.0f;
   int finest_passes = 1;
+  int refine_passes = 0;
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
@@ -235,6 +236,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.randomness = parse_randomness(o.randomness);
   options.passes = parse_passes(o.passes);
   options.finest_passes = o.finest_passes;
+  options.refine_passes = o.refine_passes;
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -349,6 +351,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"randomness", options.randomness},
                 {"passes", options.passes},
                 {"finest_passes", options.finest_passes},
+                {"refine_seams", options.refine_passes},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
@@ -411,6 +414,10 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--finest-passes", o->finest_passes,
                   "Correction passes at the finest level (the costliest), overriding --passes there; -1 = as --passes")
       ->capture_default_str()->check(CLI::Range(-1, 8));
+  cmd->add_option("--refine-seams", o->refine_passes,
+                  "Seam refinement passes at the finest level (0..8): pixels on a join between patches take "
+                  "the neighbouring patch whose 9x9 surroundings match best")
+      ->capture_default_str()->check(CLI::Range(0, 8));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));

@@ -39,6 +39,9 @@ struct SynthOptions {
   // Passes at the finest level (the most pixels), overriding `passes` there; -1 = as `passes`.
   // A second pass at the finest level changed no measure (docs/synth.md) and cost ~40% of the time.
   int finest_passes = 1;
+  // Seam refinement passes at the finest level (each 9 sub-passes): pixels on a join take the
+  // neighbour's patch whose 9x9 surroundings match best, moving joins to where the patches agree.
+  int refine_passes = 0;
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
   float kappa = 8.0f;
