@@ -29,8 +29,8 @@ struct SynthCliOptions {
   std::string randomness = "1,0";
   std::string passes = "0,2";
   float kappa = 8.0f;
-  int finest_passes = 1;
-  int refine_passes = 0;
+  int finest_passes = 2;
+  int refine_passes = 1;
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";

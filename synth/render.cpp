@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <thread>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -244,8 +245,10 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
       const double v = value(static_cast<int32_t>(t), c);
       term[3 * t + c] = normal ? 2.0 * to_unit(v) - 1.0 : v;
     }
+  // Rows are independent: they are split over threads (the bytes do not depend on the split).
+  auto blend_rows = [&](int ya, int yb) {
   std::vector<int32_t> pred(sb.dx.size());
-  for (int y = 0; y < rows; ++y) {
+  for (int y = ya; y < yb; ++y) {
     for (int x = 0; x < w; ++x) {
       unsigned char* dst = &out[(static_cast<size_t>(y) * w + x) * tb];
       if (joins_in_window(x, y) == 0) {
@@ -289,6 +292,16 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
       }
     }
   }
+  };
+  const int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
+  if (threads == 1 || static_cast<size_t>(w) * rows < 65536) {
+    blend_rows(0, rows);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back(blend_rows, rows * t / threads, rows * (t + 1) / threads);
+  for (auto& th : pool) th.join();
 }
 
 }  // namespace

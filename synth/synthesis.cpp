@@ -203,6 +203,7 @@ kernel void sy_refine(global int2* S, int w, int h, long ox, long oy, int parx, 
         for (int k = 0; k < 8; ++k) { const int e = (int)ref[8 * t + k] - (int)a[k]; d += e * e; }
         ++t;
       }
+      if (d >= bestd) break;  // cannot win any more (ties keep the earlier candidate)
     }
     if (d < bestd) { bestd = d; best = cand[c]; }
   }
