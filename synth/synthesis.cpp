@@ -148,13 +148,15 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
 // appearance vectors at the 24 taps p + d, 0 < max(|dx|, |dy|) <= 2, compared with those at u + d
 // (each appearance vector already describes a 5x5 neighbourhood, so the footprint is 9x9). The
 // pixel's current position competes as well and wins ties. Sub-passes are the 3x3 classes of the
-// absolute coordinates (a pixel reads up to 2 pixels away, so one class never reads itself).
-kernel void sy_refine(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+// absolute coordinates (a pixel reads up to 2 pixels away, so one class never reads itself), and
+// S_in = S_out. A tileable plane's period need not be a multiple of 3, so there (parx < 0) every
+// pixel is updated at once from a copy of the previous state (S_in), which keeps the output periodic.
+kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
                       global const char* A, int ew, int eh, int toroidal) {
-  const int i = (int)sy_wrapl(parx - ox, 3) + 3 * get_global_id(0);
-  const int j = (int)sy_wrapl(pary - oy, 3) + 3 * get_global_id(1);
+  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 3) + 3 * get_global_id(0);
+  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 3) + 3 * get_global_id(1);
   if (i >= w || j >= h) return;
-  const int2 s0 = S[(long)j * w + i];
+  const int2 s0 = Sin[(long)j * w + i];
   int2 cand[9];
   int n = 0;
   cand[n++] = s0;
@@ -162,7 +164,7 @@ kernel void sy_refine(global int2* S, int w, int h, long ox, long oy, int parx, 
     for (int ex = -1; ex <= 1; ++ex) {
       if (ex == 0 && ey == 0) continue;
       const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1);
-      const int2 c = S[(long)nj * w + ni];
+      const int2 c = Sin[(long)nj * w + ni];
       int ux = c.x - (ni - i), uy = c.y - (nj - j);
       if (toroidal) {
         ux = sy_wrap(ux, ew);
@@ -183,7 +185,7 @@ kernel void sy_refine(global int2* S, int w, int h, long ox, long oy, int parx, 
     for (int dx = -2; dx <= 2; ++dx) {
       if (dx == 0 && dy == 0) continue;
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
-      const int2 c = S[(long)nj * w + ni];
+      const int2 c = Sin[(long)nj * w + ni];
       global const char* a = A + 8 * ((long)c.y * ew + c.x);
       for (int k = 0; k < 8; ++k) ref[8 * t + k] = a[k];
       ++t;
@@ -395,10 +397,27 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                     static_cast<cl_int>(std::lround(o.kappa * 256)));
       }
     }
-    if (l == L) {
+    if (l == L && o.refine_passes > 0) {
+      const bool periodic = o.period_x > 0;
+      cl::Buffer previous;
+      if (periodic) {
+        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
+          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
+        });
+      }
       for (int pass = 0; pass < o.refine_passes; ++pass) {
+        if (periodic) {
+          ocl::with_cl_errors("copying a synthesis level", [&] {
+            return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
+          });
+          launch2d(dev.refine, r.w, r.h, previous, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), cl_int(-1), cl_int(-1), lv.appearance,
+                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
+                   static_cast<cl_int>(a.toroidal ? 1 : 0));
+          continue;
+        }
         for (int sub = 0; sub < 9; ++sub) {
-          launch2d(dev.refine, (r.w + 2) / 3, (r.h + 2) / 3, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+          launch2d(dev.refine, (r.w + 2) / 3, (r.h + 2) / 3, S, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                    static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub % 3),
                    static_cast<cl_int>(sub / 3), lv.appearance, static_cast<cl_int>(a.width),
                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
