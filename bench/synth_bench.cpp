@@ -15,7 +15,9 @@
 // -syntexturize_matchpatch S,S -o OUT`, and for both outputs two patch measures on 7x7 RGB patches
 // (0-255): coherence = RMS distance of output patches to their nearest exemplar patch,
 // completeness = RMS distance of exemplar patches to their nearest output patch; and the project's
-// texture similarity (default metric, 128 px crops) to the exemplar.
+// texture similarity (default metric, 128 px crops) to the exemplar; and two repetition measures that
+// the patch measures miss (a plain tiling scores 0 on both): the share of output patches that are
+// verbatim exemplar patches and the largest piece copied in one (as a share of the exemplar's area).
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
@@ -106,19 +108,23 @@ Eigen::MatrixXf patches(const Image& im, int stride) {
 // RMS over the rows of Q of the distance to the nearest row of R, per patch value:
 // sqrt(mean over queries of min squared distance / D). The nearest row is searched in a 32-D PCA
 // space of the exemplar's patches (blocked GEMM), its distance measured exactly in full 147-D.
+// `nearest` (optional) receives the index of the nearest row and the squared distance per query.
 double nearest_rms(const Eigen::MatrixXf& Q, const Eigen::MatrixXf& R, const Eigen::MatrixXf& basis,
-                   const Eigen::RowVectorXf& mean) {
+                   const Eigen::RowVectorXf& mean, std::vector<std::pair<int, float>>* nearest = nullptr) {
   const Eigen::MatrixXf q32 = (Q.rowwise() - mean) * basis, r32 = (R.rowwise() - mean) * basis;
   const Eigen::VectorXf rn = r32.rowwise().squaredNorm();
   double total = 0;
   const int block = 256;
+  if (nearest) nearest->resize(Q.rows());
   for (int b = 0; b < q32.rows(); b += block) {
     const int n = std::min<int>(block, q32.rows() - b);
     const Eigen::MatrixXf cross = q32.middleRows(b, n) * r32.transpose();  // n x |R|
     for (int i = 0; i < n; ++i) {
       Eigen::Index arg;
       (rn.transpose() - 2.0f * cross.row(i)).minCoeff(&arg);
-      total += (Q.row(b + i) - R.row(arg)).squaredNorm();
+      const float d = (Q.row(b + i) - R.row(arg)).squaredNorm();
+      total += d;
+      if (nearest) (*nearest)[b + i] = {static_cast<int>(arg), d};
     }
   }
   return std::sqrt(total / Q.rows() / Q.cols());
@@ -126,6 +132,12 @@ double nearest_rms(const Eigen::MatrixXf& Q, const Eigen::MatrixXf& R, const Eig
 
 struct Quality {
   double coherence = 0, completeness = 0, similarity = 0;
+  // Repetition: output patches (7x7, on a 4 px grid) that are verbatim exemplar patches (RMS < 1
+  // code) are grouped into pieces: grid neighbours copying from the same offset (exemplar position
+  // minus output position, modulo the exemplar). `copied` = share of the grid that is verbatim;
+  // `piece` = the largest piece's area as a share of the exemplar's (1 = a whole exemplar copied in
+  // one piece; a plain tiling scores the whole output).
+  double copied = 0, piece = 0;
 };
 
 Quality quality(const Image& exemplar, const Image& output) {
@@ -135,7 +147,50 @@ Quality quality(const Image& exemplar, const Image& output) {
   const Eigen::MatrixXf centred = ex.rowwise() - mean;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXf> es(centred.transpose() * centred);
   const Eigen::MatrixXf basis = es.eigenvectors().rightCols(32);
-  q.coherence = nearest_rms(patches(output, 4), ex, basis, mean);     // output patches on a 4-px grid
+  std::vector<std::pair<int, float>> nearest;
+  q.coherence = nearest_rms(patches(output, 4), ex, basis, mean, &nearest);  // output patches on a 4-px grid
+  {
+    // The grid of patches(output, 4): centres x = 3 + 4i, y = 3 + 4j; exemplar patches(ex, 1): row-major
+    // centres (3 + k % (ew - 6), 3 + k / (ew - 6)).
+    int cols = 0, rows = 0;
+    for (int x = 3; x + 3 < output.width; x += 4) ++cols;
+    for (int y = 3; y + 3 < output.height; y += 4) ++rows;
+    const int ew = exemplar.width, eh = exemplar.height, pw = ew - 6;
+    std::vector<int> offset(static_cast<size_t>(cols) * rows, -1);  // -1 = not verbatim
+    int verbatim = 0;
+    for (int j = 0; j < rows; ++j)
+      for (int i = 0; i < cols; ++i) {
+        const auto [k, d] = nearest[static_cast<size_t>(j) * cols + i];
+        if (d / (7 * 7 * 3) >= 1.0f) continue;
+        const int ux = 3 + k % pw, uy = 3 + k / pw;
+        const int ox = ((ux - (3 + 4 * i)) % ew + ew) % ew, oy = ((uy - (3 + 4 * j)) % eh + eh) % eh;
+        offset[static_cast<size_t>(j) * cols + i] = oy * ew + ox;
+        ++verbatim;
+      }
+    q.copied = double(verbatim) / offset.size();
+    std::vector<char> seen(offset.size(), 0);
+    size_t largest = 0;
+    for (size_t s0 = 0; s0 < offset.size(); ++s0) {
+      if (offset[s0] < 0 || seen[s0]) continue;
+      std::vector<size_t> stack{s0};
+      seen[s0] = 1;
+      size_t count = 0;
+      while (!stack.empty()) {
+        const size_t c = stack.back();
+        stack.pop_back();
+        ++count;
+        const int i = static_cast<int>(c % cols), j = static_cast<int>(c / cols);
+        const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+        for (const auto& n : nb) {
+          if (n[0] < 0 || n[1] < 0 || n[0] >= cols || n[1] >= rows) continue;
+          const size_t m = static_cast<size_t>(n[1]) * cols + n[0];
+          if (!seen[m] && offset[m] == offset[c]) seen[m] = 1, stack.push_back(m);
+        }
+      }
+      largest = std::max(largest, count);
+    }
+    q.piece = double(largest) * 16.0 / (double(ew) * eh);
+  }
   // Every exemplar patch against EVERY patch of the output's central 256x256 (a patch grid would
   // miss verbatim copies that sit off the grid: a 2 px grid gave G'MIC 12.3, a 3 px grid 1.2).
   const int cw = std::min(256, output.width), ch = std::min(256, output.height);
@@ -204,9 +259,10 @@ int main(int argc, char** argv) {
     std::sort(files.begin(), files.end());
     std::string table =
         "| exemplar | proctex CLI wall / CPU (s) | proctex synthesis in-process wall / CPU (s) | G'MIC wall / CPU (s) "
-        "| speed-up (CPU, CLI) | coherence proctex / G'MIC | completeness proctex / G'MIC | similarity proctex / G'MIC |\n"
-        "|---|---|---|---|---|---|---|---|\n";
-    std::vector<double> coh_p, coh_g, com_p, com_g, sim_p, sim_g, speed_cli, speed_lib;
+        "| speed-up (CPU, CLI) | coherence proctex / G'MIC | completeness proctex / G'MIC | similarity proctex / G'MIC "
+        "| verbatim share proctex / G'MIC | largest copied piece proctex / G'MIC |\n"
+        "|---|---|---|---|---|---|---|---|---|---|\n";
+    std::vector<double> coh_p, coh_g, com_p, com_g, sim_p, sim_g, speed_cli, speed_lib, cop_p, cop_g, pie_p, pie_g;
     std::vector<Image> tiles;
     std::vector<std::string> labels;
     for (const auto& file : files) {
@@ -252,22 +308,28 @@ int main(int argc, char** argv) {
       Quality qg;
       // With --reuse-gmic, G'MIC's measures are computed once and kept beside its output.
       const fs::path qfile = work / (name + "_gmic.quality");
+      bool cached = false;
       if (reuse_gmic && g_cpu.empty() && fs::exists(qfile)) {
-        std::ifstream(qfile) >> qg.coherence >> qg.completeness >> qg.similarity;
-      } else {
+        std::ifstream in(qfile);
+        cached = static_cast<bool>(in >> qg.coherence >> qg.completeness >> qg.similarity >> qg.copied >> qg.piece);
+      }
+      if (!cached) {
         qg = quality(ex.colour, ig);
-        std::ofstream(qfile) << fmt::format("{:.9g} {:.9g} {:.9g}\n", qg.coherence, qg.completeness, qg.similarity);
+        std::ofstream(qfile) << fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g}\n", qg.coherence, qg.completeness,
+                                            qg.similarity, qg.copied, qg.piece);
       }
       coh_p.push_back(qp.coherence), coh_g.push_back(qg.coherence);
       com_p.push_back(qp.completeness), com_g.push_back(qg.completeness);
       sim_p.push_back(qp.similarity), sim_g.push_back(qg.similarity);
+      cop_p.push_back(qp.copied), cop_g.push_back(qg.copied), pie_p.push_back(qp.piece), pie_g.push_back(qg.piece);
       speed_cli.push_back(median(g_cpu) / median(cli_cpu));
       speed_lib.push_back(median(g_cpu) / median(lib_cpu));
       table += fmt::format("| {} | {:.2f} / {:.2f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.1f}x | {:.1f} / {:.1f} | "
-                           "{:.1f} / {:.1f} | {:.3f} / {:.3f} |\n",
+                           "{:.1f} / {:.1f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
                            name, median(cli_wall), median(cli_cpu), median(lib_wall), median(lib_cpu), median(g_wall),
                            median(g_cpu), median(g_cpu) / median(cli_cpu), qp.coherence, qg.coherence,
-                           qp.completeness, qg.completeness, qp.similarity, qg.similarity);
+                           qp.completeness, qg.completeness, qp.similarity, qg.similarity, qp.copied, qg.copied,
+                           qp.piece, qg.piece);
       std::fprintf(stderr, "%s", table.substr(table.rfind("| " + name)).c_str());
       // Side by side at 2x: exemplar, a 128 px crop of each output.
       const int c = ex.colour.width;
@@ -279,9 +341,10 @@ int main(int argc, char** argv) {
       labels.push_back("G'MIC");
     }
     table += fmt::format(
-        "| **median** | | | | CLI {:.1f}x, in-process {:.1f}x | {:.1f} / {:.1f} | {:.1f} / {:.1f} | {:.3f} / {:.3f} |\n",
+        "| **median** | | | | CLI {:.1f}x, in-process {:.1f}x | {:.1f} / {:.1f} | {:.1f} / {:.1f} | {:.3f} / {:.3f} "
+        "| {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
         median(speed_cli), median(speed_lib), median(coh_p), median(coh_g), median(com_p), median(com_g),
-        median(sim_p), median(sim_g));
+        median(sim_p), median(sim_g), median(cop_p), median(cop_g), median(pie_p), median(pie_g));
 
     // Analysis of a 256^2 exemplar (no cache), and a big output window by window.
     std::string extra;

@@ -29,7 +29,8 @@ struct SynthCliOptions {
   std::string randomness = "1,0";
   std::string passes = "0,2";
   float kappa = 8.0f;
-  int finest_passes = 1;
+  int finest_passes = 2;
+  int refine_passes = 1;
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
@@ -235,6 +236,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.randomness = parse_randomness(o.randomness);
   options.passes = parse_passes(o.passes);
   options.finest_passes = o.finest_passes;
+  options.refine_passes = o.refine_passes;
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -280,9 +282,18 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   outputs.colour = o.output;
   outputs.coords = o.coords;
   outputs.bits = o.bits;
-  if (o.blend_seams != "on" && o.blend_seams != "off")
-    throw UsageError(fmt::format("--blend-seams '{}' must be on or off", o.blend_seams));
-  outputs.blend_seams = o.blend_seams == "on";
+  if (o.blend_seams == "off") {
+    outputs.blend_seams = false;
+  } else if (o.blend_seams != "on") {
+    const std::string& b = o.blend_seams;
+    if (b.size() != 1 || b[0] < '1' || b[0] > '4')
+      throw UsageError(fmt::format("--blend-seams '{}' must be on, off or a width of 1..4 pixels", b),
+                       "e.g. --blend-seams 3 ramps across each join over 3 pixels on either side");
+    outputs.blend_seams = true;
+    outputs.blend_radius = b[0] - '0';
+  } else {
+    outputs.blend_seams = true;
+  }
   struct MapArg {
     std::string kind, in, out;
   };
@@ -340,10 +351,12 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"randomness", options.randomness},
                 {"passes", options.passes},
                 {"finest_passes", options.finest_passes},
+                {"refine_seams", options.refine_passes},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
                 {"blend_seams", outputs.blend_seams},
+                {"blend_radius", outputs.blend_seams ? outputs.blend_radius : 0},
                 {"coords", o.coords},
                 {"jitter_map", o.jitter_map},
                 {"pastes", o.pastes},
@@ -401,6 +414,10 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--finest-passes", o->finest_passes,
                   "Correction passes at the finest level (the costliest), overriding --passes there; -1 = as --passes")
       ->capture_default_str()->check(CLI::Range(-1, 8));
+  cmd->add_option("--refine-seams", o->refine_passes,
+                  "Seam refinement passes at the finest level (0..8): pixels on a join between patches take "
+                  "the neighbouring patch whose 9x9 surroundings match best")
+      ->capture_default_str()->check(CLI::Range(0, 8));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
@@ -413,8 +430,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
       ->allow_extra_args(false);
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--blend-seams", o->blend_seams,
-                  "on|off: average the colour (and --apply maps) across the joins between copied patches; "
-                  "the coordinates (--coords) stay exact and inside a patch the pixels are exact copies")
+                  "on|off|N: ramp the colour (and --apply maps) across the joins between copied patches over N "
+                  "pixels on either side (on = 3); the coordinates (--coords) stay exact and inside a patch "
+                  "the pixels are exact copies")
       ->capture_default_str();
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
                   "Whether the exemplar itself tiles: auto (measure the seam), yes, no")->capture_default_str();

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <thread>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -141,39 +142,49 @@ void check_folder(const fs::path& p) {
   }
 }
 
-// Seam blending: for every pixel of the inner w x rows region of the padded coordinates P (pw wide),
-// the 9 texels its 3x3 neighbours d predict, E[S(p + d) - d], in the order of d (row-major, centre
-// 4th); -1 where the prediction leaves a bounded exemplar.
-void seam_predictions(const std::vector<int32_t>& P, int pw, int w, int rows, int ew, int eh, bool toroidal,
-                      std::vector<int32_t>& out) {
-  out.resize(static_cast<size_t>(w) * rows * 9);
-  for (int y = 0; y < rows; ++y) {
-    for (int x = 0; x < w; ++x) {
-      int32_t* pred = &out[(static_cast<size_t>(y) * w + x) * 9];
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const size_t k = static_cast<size_t>(y + 1 + dy) * pw + (x + 1 + dx);
-          int ux = P[2 * k] - dx, uy = P[2 * k + 1] - dy;
-          if (toroidal) {
-            ux = (ux + ew) % ew;
-            uy = (uy + eh) % eh;
-          } else if (ux < 0 || uy < 0 || ux >= ew || uy >= eh) {
-            *pred++ = -1;
-            continue;
-          }
-          *pred++ = uy * ew + ux;
-        }
-      }
-    }
+// Seam blending over a (2R + 1)^2 neighbourhood: output pixel p is the weighted mean of the texels
+// its neighbours p + d predict for it, E[S(p + d) - d] (|dx|, |dy| <= R), with the tent weights
+// (R + 1 - |dx|)(R + 1 - |dy|): the weight falls with the distance from p, so across a join the
+// colour ramps from one patch to the other over 2R pixels. P holds the coordinates of the strip
+// padded by R on every side (pw wide). A prediction that leaves a bounded exemplar is skipped.
+// Averaged in the palette's own encoding (codes for 8/16 bit, linear floats for EXR), rounded to
+// the nearest code; normals are averaged as vectors (decoded from the sRGB-encoded (n + 1) / 2 like
+// the matching does) and renormalised. Inside a patch all predictions are one texel and the result
+// is that texel's bytes. Deterministic: a fixed summation order, independent of strips and threads.
+struct SeamBlend {
+  int radius = 1;
+  int ew = 0, eh = 0;
+  bool toroidal = false;
+  std::vector<int> dx, dy, weight;  // the taps, centre first
+  SeamBlend(int r, int w, int h, bool torus) : radius(r), ew(w), eh(h), toroidal(torus) {
+    dx.push_back(0), dy.push_back(0), weight.push_back((r + 1) * (r + 1));
+    for (int y = -r; y <= r; ++y)
+      for (int x = -r; x <= r; ++x)
+        if (x != 0 || y != 0) dx.push_back(x), dy.push_back(y), weight.push_back((r + 1 - std::abs(x)) * (r + 1 - std::abs(y)));
   }
-}
+  // The texels the taps predict for pixel (x, y) of the inner region; -1 = outside the exemplar.
+  // Returns true when every valid prediction is the centre's (the pixel is inside a patch).
+  bool predict(const std::vector<int32_t>& P, int pw, int x, int y, int32_t* pred) const {
+    bool same = true;
+    for (size_t k = 0; k < dx.size(); ++k) {
+      const size_t i = static_cast<size_t>(y + radius + dy[k]) * pw + (x + radius + dx[k]);
+      int ux = P[2 * i] - dx[k], uy = P[2 * i + 1] - dy[k];
+      if (toroidal) {
+        ux = ux < 0 ? ux + ew : ux >= ew ? ux - ew : ux;
+        uy = uy < 0 ? uy + eh : uy >= eh ? uy - eh : uy;
+      } else if (ux < 0 || uy < 0 || ux >= ew || uy >= eh) {
+        pred[k] = -1;
+        continue;
+      }
+      pred[k] = uy * ew + ux;
+      same = same && pred[k] == pred[0];
+    }
+    return same;
+  }
+};
 
-// The weighted mean of the predicted texels in the palette's own encoding (codes for 8/16 bit,
-// linear floats for EXR), rounded to the nearest code; normals are averaged as vectors (decoded
-// from the sRGB-encoded (n + 1) / 2 like the matching does) and renormalised. Inside a patch all
-// predictions are one texel and the result is that texel's bytes.
-void blend_texels(const Palette& pal, bool normal, const std::vector<int32_t>& predictions, size_t n,
-                  int centre_weight, std::vector<unsigned char>& out) {
+void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std::vector<int32_t>& P, int pw, int w,
+                 int rows, std::vector<unsigned char>& out) {
   const size_t tb = pal.texel_bytes;
   const bool wide = pal.type == OIIO::TypeDesc::UINT16, flt = pal.type == OIIO::TypeDesc::FLOAT;
   const double levels = wide ? 65535.0 : 255.0;
@@ -197,47 +208,100 @@ void blend_texels(const Palette& pal, bool normal, const std::vector<int32_t>& p
   auto from_unit = [&](double u) {  // sRGB-encoded [0, 1] -> palette value
     return flt ? static_cast<double>(srgb_to_linear(static_cast<float>(u))) : u * levels;
   };
-  for (size_t i = 0; i < n; ++i) {
-    const int32_t* pred = &predictions[i * 9];
-    unsigned char* dst = &out[i * tb];
-    bool same = true;
-    for (int k = 0; k < 9; ++k) same = same && (pred[k] < 0 || pred[k] == pred[4]);
-    if (same) {  // inside a patch: a verbatim copy
-      std::memcpy(dst, &pal.bytes[static_cast<size_t>(pred[4]) * tb], tb);
-      continue;
+  // Fast path: a pixel whose whole window lies inside one patch (every pair of adjacent pixels in it
+  // continues the patch) copies its texel; the same result as predict() finding all predictions
+  // equal, without the (2R + 1)^2 predictions. `join` marks a padded pixel that does not continue
+  // the patch of its right or lower neighbour; `sum` is its summed-area table.
+  const int R = sb.radius, ph = rows + 2 * R;
+  auto continues = [&](size_t a, size_t b, int dx, int dy) {  // S[b] = S[a] + (dx, dy) in the exemplar
+    int ux = P[2 * b] - dx, uy = P[2 * b + 1] - dy;
+    if (sb.toroidal) {
+      ux = ux < 0 ? ux + sb.ew : ux >= sb.ew ? ux - sb.ew : ux;
+      uy = uy < 0 ? uy + sb.eh : uy >= sb.eh ? uy - sb.eh : uy;
+    } else if (ux < 0 || uy < 0 || ux >= sb.ew || uy >= sb.eh) {
+      return false;
     }
-    double sum[3] = {0, 0, 0}, weight = 0;
-    for (int k = 0; k < 9; ++k) {
-      if (pred[k] < 0) continue;
-      const double wk = k == 4 ? centre_weight : 1;
-      weight += wk;
-      for (int c = 0; c < 3; ++c) {
-        const double v = value(pred[k], c);
-        sum[c] += wk * (normal ? 2.0 * to_unit(v) - 1.0 : v);
-      }
+    return ux == P[2 * a] && uy == P[2 * a + 1];
+  };
+  std::vector<int32_t> sum(static_cast<size_t>(pw + 1) * (ph + 1), 0);
+  for (int y = 0; y < ph; ++y) {
+    int32_t row = 0;
+    for (int x = 0; x < pw; ++x) {
+      const size_t a = static_cast<size_t>(y) * pw + x;
+      const bool join = (x + 1 < pw && !continues(a, a + 1, 1, 0)) || (y + 1 < ph && !continues(a, a + pw, 0, 1));
+      row += join ? 1 : 0;
+      sum[static_cast<size_t>(y + 1) * (pw + 1) + x + 1] = sum[static_cast<size_t>(y) * (pw + 1) + x + 1] + row;
     }
-    double res[3];
-    if (normal) {
-      const double len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-      for (int c = 0; c < 3; ++c) {
-        const double nc = len > 0 ? sum[c] / len : (c == 2 ? 1.0 : 0.0);
-        res[c] = from_unit(std::clamp((nc + 1.0) / 2.0, 0.0, 1.0));
-      }
-    } else {
-      for (int c = 0; c < 3; ++c) res[c] = sum[c] / weight;
-    }
+  }
+  auto joins_in_window = [&](int x, int y) {  // inner (x, y): padded window [x, x + 2R] x [y, y + 2R]
+    const size_t x0 = x, x1 = x + 2 * R + 1, y0 = y, y1 = y + 2 * R + 1;
+    return sum[y1 * (pw + 1) + x1] - sum[y0 * (pw + 1) + x1] - sum[y1 * (pw + 1) + x0] + sum[y0 * (pw + 1) + x0];
+  };
+  // Every texel's channels as summed: the palette value, or the decoded normal component.
+  const size_t texels = pal.bytes.size() / tb;
+  std::vector<double> term(3 * texels);
+  for (size_t t = 0; t < texels; ++t)
     for (int c = 0; c < 3; ++c) {
-      if (flt) {
-        const float f = static_cast<float>(res[c]);
-        std::memcpy(dst + 4 * c, &f, 4);
-      } else if (wide) {
-        const uint16_t v = static_cast<uint16_t>(std::clamp(std::lround(res[c]), 0L, 65535L));
-        std::memcpy(dst + 2 * c, &v, 2);
+      const double v = value(static_cast<int32_t>(t), c);
+      term[3 * t + c] = normal ? 2.0 * to_unit(v) - 1.0 : v;
+    }
+  // Rows are independent: they are split over threads (the bytes do not depend on the split).
+  auto blend_rows = [&](int ya, int yb) {
+  std::vector<int32_t> pred(sb.dx.size());
+  for (int y = ya; y < yb; ++y) {
+    for (int x = 0; x < w; ++x) {
+      unsigned char* dst = &out[(static_cast<size_t>(y) * w + x) * tb];
+      if (joins_in_window(x, y) == 0) {
+        const size_t c = static_cast<size_t>(y + R) * pw + (x + R);
+        const size_t texel = static_cast<size_t>(P[2 * c + 1]) * sb.ew + P[2 * c];
+        std::memcpy(dst, &pal.bytes[texel * tb], tb);
+        continue;
+      }
+      if (sb.predict(P, pw, x, y, pred.data())) {  // inside a patch: a verbatim copy
+        std::memcpy(dst, &pal.bytes[static_cast<size_t>(pred[0]) * tb], tb);
+        continue;
+      }
+      double sum[3] = {0, 0, 0}, weight = 0;
+      for (size_t k = 0; k < pred.size(); ++k) {
+        if (pred[k] < 0) continue;
+        const double wk = sb.weight[k];
+        weight += wk;
+        const double* v = &term[3 * static_cast<size_t>(pred[k])];
+        for (int c = 0; c < 3; ++c) sum[c] += wk * v[c];
+      }
+      double res[3];
+      if (normal) {
+        const double len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+        for (int c = 0; c < 3; ++c) {
+          const double nc = len > 0 ? sum[c] / len : (c == 2 ? 1.0 : 0.0);
+          res[c] = from_unit(std::clamp((nc + 1.0) / 2.0, 0.0, 1.0));
+        }
       } else {
-        dst[c] = static_cast<unsigned char>(std::clamp(std::lround(res[c]), 0L, 255L));
+        for (int c = 0; c < 3; ++c) res[c] = sum[c] / weight;
+      }
+      for (int c = 0; c < 3; ++c) {
+        if (flt) {
+          const float f = static_cast<float>(res[c]);
+          std::memcpy(dst + 4 * c, &f, 4);
+        } else if (wide) {
+          const uint16_t v = static_cast<uint16_t>(std::clamp(std::lround(res[c]), 0L, 65535L));
+          std::memcpy(dst + 2 * c, &v, 2);
+        } else {
+          dst[c] = static_cast<unsigned char>(std::clamp(std::lround(res[c]), 0L, 255L));
+        }
       }
     }
   }
+  };
+  const int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
+  if (threads == 1 || static_cast<size_t>(w) * rows < 65536) {
+    blend_rows(0, rows);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back(blend_rows, rows * t / threads, rows * (t + 1) / threads);
+  for (auto& th : pool) th.join();
 }
 
 }  // namespace
@@ -298,28 +362,28 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
       static_cast<int>(std::clamp<size_t>(max_strip_pixels / static_cast<size_t>(win.width), 1, win.height));
   std::vector<unsigned char> buffer;
   std::vector<float> coord_rows;
-  std::vector<int32_t> S, predictions;
+  std::vector<int32_t> S, P;
+  const int R = o.blend_seams ? o.blend_radius : 0;
+  const SeamBlend blend(std::max(R, 1), ex.width(), ex.height(), synth.analysis().toroidal);
   for (int y0 = 0; y0 < win.height; y0 += rows_per_strip) {
     const int rows = std::min(rows_per_strip, win.height - y0);
     const size_t n = static_cast<size_t>(win.width) * rows;
-    if (o.blend_seams) {
-      // One pixel more on every side (exact by spatial determinism; a tileable plane wraps by itself).
-      const Window strip{win.x - 1, win.y + y0 - 1, win.width + 2, rows + 2};
-      const std::vector<int32_t> P = synth.synthesise(strip, options);
+    if (R > 0) {
+      // R pixels more on every side (exact by spatial determinism; a tileable plane wraps by itself).
+      const Window strip{win.x - R, win.y + y0 - R, win.width + 2 * R, rows + 2 * R};
+      P = synth.synthesise(strip, options);
       S.resize(2 * n);
       for (int y = 0; y < rows; ++y)
-        std::memcpy(&S[2 * static_cast<size_t>(y) * win.width], &P[2 * ((y + 1) * static_cast<size_t>(strip.width) + 1)],
+        std::memcpy(&S[2 * static_cast<size_t>(y) * win.width], &P[2 * ((y + R) * static_cast<size_t>(strip.width) + R)],
                     2 * sizeof(int32_t) * win.width);
-      seam_predictions(P, strip.width, win.width, rows, ex.width(), ex.height(), synth.analysis().toroidal,
-                       predictions);
     } else {
       S = synth.synthesise(Window{win.x, win.y + y0, win.width, rows}, options);
     }
     stats.peak_strip_pixels = std::max(stats.peak_strip_pixels, n);
     for (auto& t : targets) {
       buffer.resize(n * t.palette.texel_bytes);
-      if (o.blend_seams) {
-        blend_texels(t.palette, t.normal, predictions, n, o.blend_centre_weight, buffer);
+      if (R > 0) {
+        blend_strip(t.palette, t.normal, blend, P, win.width + 2 * R, win.width, rows, buffer);
       } else {
         for (size_t i = 0; i < n; ++i) {
           const size_t texel = static_cast<size_t>(S[2 * i + 1]) * ex.width() + S[2 * i];

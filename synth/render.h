@@ -19,12 +19,13 @@ struct RenderOutputs {
   std::vector<std::filesystem::path> maps;           // optional: one per exemplar.maps entry (or empty)
   int bits = 0;                                      // PNG/TIFF bit depth: 8 or 16; 0 = PNG 8, TIFF 16
   // Seam blending of the written colour and maps (the coordinates stay exact): pixel p is the
-  // weighted mean over its 3x3 neighbours d of E[S(p + d) - d], the texel neighbour d predicts for p
-  // (centre weight `blend_centre_weight`, others 1; a prediction outside a bounded exemplar is
-  // skipped). Inside a patch every prediction is the same texel, so the output is an exact copy;
+  // weighted mean over its neighbours d (|dx|, |dy| <= blend_radius) of E[S(p + d) - d], the texel
+  // neighbour d predicts for p, with tent weights (R + 1 - |dx|)(R + 1 - |dy|) (a prediction outside a
+  // bounded exemplar is skipped): across a join the colour ramps from one patch to the other over
+  // 2R pixels. Inside a patch every prediction is the same texel, so the output is an exact copy;
   // normals are averaged as vectors and renormalised. Off = each pixel copies one texel.
   bool blend_seams = false;
-  int blend_centre_weight = 2;
+  int blend_radius = 3;
 };
 
 struct RenderStats {

@@ -75,6 +75,25 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
+  // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
+  // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
+  // keep it. Only the pixels on a join between patches are matched; at the finer levels, where
+  // patches are large, that is a small share of the pixels.
+  {
+    const int2 s0 = S[(long)j * w + i];
+    int inside = 1;
+    for (int dy = -1; dy <= 1 && inside; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
+        const int2 c = S[(long)nj * w + ni];
+        int ex = s0.x + (ni - i) * spacing, ey = s0.y + (nj - j) * spacing;
+        if (toroidal) { ex = sy_wrap(ex, ew); ey = sy_wrap(ey, eh); }
+        if (c.x != ex || c.y != ey) { inside = 0; break; }
+      }
+    }
+    if (inside) return;
+  }
   const int tdx[9] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
   const int tdy[9] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
   int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -124,6 +143,74 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   }
   S[(long)j * w + i] = best;
 }
+// Seam refinement at the finest level: a pixel on a join between patches takes the coherent
+// candidate of one of its 8 neighbours (u = S[p + e] - e) whose wider surroundings match best: the
+// appearance vectors at the 24 taps p + d, 0 < max(|dx|, |dy|) <= 2, compared with those at u + d
+// (each appearance vector already describes a 5x5 neighbourhood, so the footprint is 9x9). The
+// pixel's current position competes as well and wins ties. Sub-passes are the 3x3 classes of the
+// absolute coordinates (a pixel reads up to 2 pixels away, so one class never reads itself), and
+// S_in = S_out. A tileable plane's period need not be a multiple of 3, so there (parx < 0) every
+// pixel is updated at once from a copy of the previous state (S_in), which keeps the output periodic.
+kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+                      global const char* A, int ew, int eh, int toroidal) {
+  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 3) + 3 * get_global_id(0);
+  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 3) + 3 * get_global_id(1);
+  if (i >= w || j >= h) return;
+  const int2 s0 = Sin[(long)j * w + i];
+  int2 cand[9];
+  int n = 0;
+  cand[n++] = s0;
+  for (int ey = -1; ey <= 1; ++ey) {
+    for (int ex = -1; ex <= 1; ++ex) {
+      if (ex == 0 && ey == 0) continue;
+      const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1);
+      const int2 c = Sin[(long)nj * w + ni];
+      int ux = c.x - (ni - i), uy = c.y - (nj - j);
+      if (toroidal) {
+        ux = sy_wrap(ux, ew);
+        uy = sy_wrap(uy, eh);
+      } else if (ux < 2 || uy < 2 || ux >= ew - 2 || uy >= eh - 2) {
+        continue;  // its surroundings would leave a bounded exemplar
+      }
+      int dup = 0;
+      for (int k = 0; k < n; ++k) dup |= (cand[k].x == ux && cand[k].y == uy);
+      if (!dup) cand[n++] = (int2)(ux, uy);
+    }
+  }
+  if (n == 1) return;  // inside a patch: every neighbour continues it
+  // The synthesised surroundings: the appearance at S[p + d].
+  char ref[24 * 8];
+  int t = 0;
+  for (int dy = -2; dy <= 2; ++dy) {
+    for (int dx = -2; dx <= 2; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
+      const int2 c = Sin[(long)nj * w + ni];
+      global const char* a = A + 8 * ((long)c.y * ew + c.x);
+      for (int k = 0; k < 8; ++k) ref[8 * t + k] = a[k];
+      ++t;
+    }
+  }
+  int2 best = s0;
+  int bestd = 0x7fffffff;
+  for (int c = 0; c < n; ++c) {
+    int d = 0;
+    t = 0;
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const int ux = toroidal ? sy_wrap(cand[c].x + dx, ew) : sy_reflect(cand[c].x + dx, ew);
+        const int uy = toroidal ? sy_wrap(cand[c].y + dy, eh) : sy_reflect(cand[c].y + dy, eh);
+        global const char* a = A + 8 * ((long)uy * ew + ux);
+        for (int k = 0; k < 8; ++k) { const int e = (int)ref[8 * t + k] - (int)a[k]; d += e * e; }
+        ++t;
+      }
+      if (d >= bestd) break;  // cannot win any more (ties keep the earlier candidate)
+    }
+    if (d < bestd) { bestd = d; best = cand[c]; }
+  }
+  S[(long)j * w + i] = best;
+}
 )CL";
 
 struct Region {
@@ -148,7 +235,7 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 struct Synthesizer::Device {
   cl::Program program;
-  cl::Kernel upsample, correct;
+  cl::Kernel upsample, correct, refine;
   struct Level {
     cl::Buffer appearance, neighbourhood, coherent, projection;
   };
@@ -187,6 +274,7 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   for (int p : o.passes)
     if (p < 0 || p > 8) throw UsageError("--passes must be in [0, 8]");
   if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
+  if (o.refine_passes < 0 || o.refine_passes > 8) throw UsageError("--refine-seams must be in [0, 8]");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
     throw UsageError("the tiling period must be in [2, 16777216]");
   if ((o.period_x > 0) != (o.period_y > 0)) throw UsageError("give a period along both axes or neither");
@@ -215,6 +303,7 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
+    device_->refine = cl::Kernel(device_->program, "sy_refine");
     return 0;
   });
   for (const auto& lv : analysis.level) {
@@ -239,7 +328,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   const int L = a.levels;
   const int l0 = first_level(a, o);
   // The reach of level l's correction: each sub-pass reads one pixel around, 4 per pass.
-  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2; };
+  // At the finest level the seam refinement's 9 sub-passes read 2 pixels around each.
+  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2 + (l == L ? 18 * o.refine_passes : 0); };
   const int pad = pad_at(L);
   // Regions, finest first: E_L = window + pad_L; E_{l-1} = parents(E_l) + pad_{l-1}.
   std::vector<Region> region(L + 1);
@@ -305,6 +395,33 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                     lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
                     static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
                     static_cast<cl_int>(std::lround(o.kappa * 256)));
+      }
+    }
+    if (l == L && o.refine_passes > 0) {
+      const bool periodic = o.period_x > 0;
+      cl::Buffer previous;
+      if (periodic) {
+        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
+          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
+        });
+      }
+      for (int pass = 0; pass < o.refine_passes; ++pass) {
+        if (periodic) {
+          ocl::with_cl_errors("copying a synthesis level", [&] {
+            return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
+          });
+          launch2d(dev.refine, r.w, r.h, previous, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), cl_int(-1), cl_int(-1), lv.appearance,
+                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
+                   static_cast<cl_int>(a.toroidal ? 1 : 0));
+          continue;
+        }
+        for (int sub = 0; sub < 9; ++sub) {
+          launch2d(dev.refine, (r.w + 2) / 3, (r.h + 2) / 3, S, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub % 3),
+                   static_cast<cl_int>(sub / 3), lv.appearance, static_cast<cl_int>(a.width),
+                   static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
+        }
       }
     }
     parent = S;

@@ -50,6 +50,10 @@ std::vector<float> raw_pixels(const std::filesystem::path& p, int& w, int& h, in
   return px;
 }
 
+std::string fmt_window(int64_t x, int64_t y, int w, int h) {
+  return "--window " + std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(w) + "," + std::to_string(h);
+}
+
 std::vector<std::string> files_in(const std::filesystem::path& dir) {
   std::vector<std::string> out;
   for (const auto& e : std::filesystem::directory_iterator(dir))
@@ -194,6 +198,76 @@ TEST(SynthCli, SeamBlendingKeepsPatchesExactAndWindowsStitched) {
         ASSERT_EQ(half[static_cast<size_t>(y) * 48 * c + x], whole[static_cast<size_t>(y) * 96 * c + 48 * k * c + x])
             << k << " " << x << "," << y;
   }
+}
+
+// --blend-seams N ramps the colour across a join over N pixels on either side: a pixel whose
+// (2N + 1)^2 window holds no join (every pair of adjacent pixels continues one exemplar patch, read
+// from --coords) is an exact copy of the unblended output; with N = 3 pixels 2-3 px from a join
+// change too (the old 1 px blend left them alone), with N = 1 they do not.
+TEST(SynthCli, SeamBlendWidthReachesNPixelsFromAJoin) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  auto synth = [&](const std::string& out, const std::string& args) {
+    const auto r = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / out).string() +
+                                   "' --exemplar-tiles yes --seed 5 " + args,
+                               dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  };
+  const int X = 1000, Y = -700, W = 96, H = 64, M = 4;  // coordinates with a margin of M
+  synth("big.png", fmt_window(X - M, Y - M, W + 2 * M, H + 2 * M) + " --blend-seams off --coords '" +
+                       (dir / "uv.exr").string() + "'");
+  synth("off.png", fmt_window(X, Y, W, H) + " --blend-seams off");
+  synth("b1.png", fmt_window(X, Y, W, H) + " --blend-seams 1");
+  synth("b3.png", fmt_window(X, Y, W, H) + " --blend-seams 3");
+  int w, h, c, cw, ch, cc;
+  std::string f;
+  const auto uv = raw_pixels(dir / "uv.exr", cw, ch, cc, f);
+  ASSERT_EQ(cw, W + 2 * M);
+  const auto off = raw_pixels(dir / "off.png", w, h, c, f);
+  const auto b1 = raw_pixels(dir / "b1.png", w, h, c, f);
+  const auto b3 = raw_pixels(dir / "b3.png", w, h, c, f);
+  ASSERT_EQ(w, W);
+  auto u = [&](int x, int y, int k) { return static_cast<int>(uv[(static_cast<size_t>(y) * cw + x) * cc + k]); };
+  // join(x, y): the pixel (margin coordinates) does not continue its right or lower neighbour's patch.
+  auto breaks = [&](int x0, int y0, int x1, int y1) {
+    return ((u(x0, y0, 0) + (x1 - x0)) % 64 != u(x1, y1, 0)) || ((u(x0, y0, 1) + (y1 - y0)) % 64 != u(x1, y1, 1));
+  };
+  auto near_join = [&](int x, int y, int n) {  // inner pixel (x, y): a broken pair inside its window
+    for (int yy = y + M - n; yy <= y + M + n; ++yy)
+      for (int xx = x + M - n; xx <= x + M + n; ++xx) {
+        if (xx < x + M + n && breaks(xx, yy, xx + 1, yy)) return true;
+        if (yy < y + M + n && breaks(xx, yy, xx, yy + 1)) return true;
+      }
+    return false;
+  };
+  auto same_pixel = [&](const std::vector<float>& a, int x, int y) {
+    for (int k = 0; k < c; ++k)
+      if (a[(static_cast<size_t>(y) * W + x) * c + k] != off[(static_cast<size_t>(y) * W + x) * c + k]) return false;
+    return true;
+  };
+  int inside = 0, far_changed3 = 0, joins = 0;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      if (breaks(x + M, y + M, x + M + 1, y + M) || breaks(x + M, y + M, x + M, y + M + 1)) ++joins;
+      if (!near_join(x, y, 3)) {
+        ++inside;
+        ASSERT_TRUE(same_pixel(b3, x, y)) << x << "," << y;
+      }
+      if (!near_join(x, y, 1)) {
+        ASSERT_TRUE(same_pixel(b1, x, y)) << x << "," << y;
+        if (!same_pixel(b3, x, y)) ++far_changed3;
+      }
+    }
+  EXPECT_GT(joins, 20);          // the window has joins to blend
+  EXPECT_GT(inside, W * H / 10);  // and patch interiors that stay exact
+  EXPECT_GT(far_changed3, joins / 4) << "the 3 px blend should reach 2-3 px from the joins";
+  // A width out of range is a usage error.
+  const auto bad = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "bad.png").string() +
+                                   "' --size 32 --blend-seams 9",
+                               dir.path());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--blend-seams"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.png"));
 }
 
 TEST(SynthCli, BadInputIsOneLineAndLeavesNoFile) {

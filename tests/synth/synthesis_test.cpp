@@ -248,6 +248,36 @@ double coherence(const std::vector<int32_t>& S, int w, int h, int ew, int column
   return double(coherent) / total;
 }
 
+TEST(Synth, SeamRefinementKeepsWindowsExactAndPatchesWhole) {
+  // The refinement's 9 sub-passes read 2 pixels around: a window must still equal the same region
+  // of a larger synthesis (also a single pixel), on a toroidal and on a bounded exemplar.
+  for (const bool torus : {true, false}) {
+    Synthesizer s(torus ? periodic_analysis() : photo_analysis());
+    SynthOptions o;
+    o.seed = 4;
+    o.refine_passes = 2;
+    const Window whole{(int64_t(1) << 41) - 3, -999, 144, 112};
+    const auto big = s.synthesise(whole, o);
+    for (const Window part : {Window{whole.x + 5, whole.y, 60, 112}, Window{whole.x + 71, whole.y + 37, 73, 41},
+                              Window{whole.x + 100, whole.y + 50, 1, 1}})
+      ASSERT_EQ(s.synthesise(part, o), cut(big, whole, part)) << torus;
+    // It moves joins between patches (the map changes) and takes only positions that continue a
+    // neighbour's patch, so the patches do not break up: the share of adjacent pixels continuing
+    // a patch does not fall.
+    SynthOptions plain = o;
+    plain.refine_passes = 0;
+    const auto before = s.synthesise(whole, plain);
+    EXPECT_NE(before, big) << torus;
+    const int ew = s.analysis().width;
+    EXPECT_GE(coherence(big, whole.width, whole.height, ew), coherence(before, whole.width, whole.height, ew) - 0.005)
+        << torus;
+  }
+  SynthOptions bad;
+  bad.refine_passes = 9;
+  Synthesizer s(periodic_analysis());
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, bad), UsageError);
+}
+
 TEST(Synth, OutputIsNeitherATilingNorNoise) {
   Synthesizer s(photo_analysis());
   const Window w{0, 0, 192, 192};
