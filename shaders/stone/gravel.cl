@@ -57,6 +57,10 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   float3 sc = pt_vary_color(P.stone_color, P.variation, st.v.id, pt_rand(st.v.cell.x, st.v.cell.y, 3, seed));
   const float n = pt_fbm(q * 3.0f, w * 3.0f, 3, 2.0f, 0.5f, pt_subseed(seed, 2u));
   sc *= fmax(light, 0.05f) * (1.0f + P.roughness * 0.5f * n);
+  // A faint sheen on the facets facing the light, whatever the stone's colour (dark stone still
+  // shows its stones); per stone where the facets are below a pixel.
+  const float ra_sheen = pt_rand(st.v.cell.x, st.v.cell.y, 2, seed);
+  sc += 0.03f * P.lighting * mix(ra_sheen, fmax(light - 1.0f, 0.0f), detail);
   sc *= mix(0.6f, 1.0f, pt_aa_smoothstep(0.0f, 0.12f, st.inner, w));  // a soft rim
   // The wide gaps show a lower layer of stones, in the gap colour's shadow.
   const uint lower_seed = pt_subseed(seed, 4u);
