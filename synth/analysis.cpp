@@ -1,5 +1,6 @@
 #include "synth/analysis.h"
 #include "synth/plane.h"
+#include "synth/cache_io.h"
 
 #include <algorithm>
 #include <atomic>
@@ -307,22 +308,8 @@ std::string content_hash(const Exemplar& ex, const Channels& ch, bool toroidal) 
 
 constexpr uint32_t kMagic = 0x53594e54;  // "SYNT"
 
-template <typename T>
-void write_vec(std::ofstream& f, const std::vector<T>& v) {
-  const uint64_t n = v.size();
-  f.write(reinterpret_cast<const char*>(&n), sizeof n);
-  f.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
-}
-
-template <typename T>
-bool read_vec(std::ifstream& f, std::vector<T>& v, uint64_t expected) {
-  uint64_t n = 0;
-  f.read(reinterpret_cast<char*>(&n), sizeof n);
-  if (!f || n != expected) return false;
-  v.resize(n);
-  f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
-  return static_cast<bool>(f);
-}
+using detail::read_vec;
+using detail::write_vec;
 
 bool load_cache(const std::filesystem::path& file, Analysis& a) {
   std::ifstream f(file, std::ios::binary);

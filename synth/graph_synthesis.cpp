@@ -1,4 +1,5 @@
 #include "synth/graph_synthesis.h"
+#include "synth/cache_io.h"
 
 #include <algorithm>
 #include <atomic>
@@ -371,22 +372,8 @@ std::string graph_hash(const LoadedGraph& lg) {
   return fnv1a_hex(key);
 }
 
-template <typename T>
-void write_vec(std::ofstream& f, const std::vector<T>& v) {
-  const uint64_t n = v.size();
-  f.write(reinterpret_cast<const char*>(&n), sizeof n);
-  f.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
-}
-
-template <typename T>
-bool read_vec(std::ifstream& f, std::vector<T>& v, uint64_t expected) {
-  uint64_t n = 0;
-  f.read(reinterpret_cast<char*>(&n), sizeof n);
-  if (!f || n != expected) return false;
-  v.resize(n);
-  f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
-  return static_cast<bool>(f);
-}
+using detail::read_vec;
+using detail::write_vec;
 
 // The cached analysis of a graph whose size, levels, exemplars and slots are already in `a`.
 bool load_graph_cache(const std::filesystem::path& file, GraphAnalysis& a) {
