@@ -490,8 +490,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
   // The final choice weighs the similarity with the selection's probability of the shader: a
   // flexible shader that tunes itself into a look-alike must also be a likely material.
-  auto decision = [&](double similarity, double probability) {
-    return std::log(std::max(similarity, 1e-9)) + o.selection_weight * std::log(std::max(probability, 1e-9));
+  // `share`: the part of selection_weight the selection gets (less on clean patterns, below).
+  auto decision = [&](double similarity, double probability, double share = 1.0) {
+    return std::log(std::max(similarity, 1e-9)) + share * o.selection_weight * std::log(std::max(probability, 1e-9));
   };
   // Finalists: the best `starts` lanes by similarity and selection together, and the best `starts`
   // lanes by the similarity the race reached alone (fewer when they coincide). Either order alone
@@ -708,9 +709,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   for (auto& c : final_candidates) {
     const double score = pattern && c.similarity >= kCertainMatch
                              ? 1e6 + c.similarity
-                             : std::log(std::max(c.similarity, 1e-9)) +
-                                   o.selection_weight * (pattern ? kPatternSelectionShare : 1.0) *
-                                       std::log(std::max(c.from->probability, 1e-9));
+                             : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
     if (score > best) {
       best = score;
       result.probability = c.from->probability;
