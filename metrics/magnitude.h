@@ -12,7 +12,7 @@
 // seeds of noise differ everywhere in it): search/ uses it only to polish a deterministic match.
 //
 // Features: the analysis planes L*/100, a*/100, b*/100 area-averaged to size x size (default kSize;
-// a finer pattern needs a larger size: area-averaging 44 stripes to 64 px leaves nothing), FFTW r2c,
+// a size at which the pattern is above the Nyquist limit: 44 stripes alias at 64 px), FFTW r2c,
 // sqrt(|F| / size^2) (compressive, stable near the many zero coefficients of a clean pattern; the
 // DC term is the plane's mean, so the colour counts). Distance: RMS difference.
 #include "metrics/metric.h"

@@ -555,7 +555,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   RenderSettings full;
   full.width = full.height = o.resolution;
   // Peakiness on the 64 px magnitude (its threshold was set there); the polish compares magnitudes
-  // at the refinement's whole resolution, so fine patterns (44 stripes, thin grid lines) stay visible.
+  // at the refinement's whole resolution, where fine patterns (44 stripes) do not alias.
   static const metrics::MagnitudeMetric peak_magnitude;
   const double peakiness = spectral_peakiness(peak_magnitude.features(target, o.coarse_resolution));
   const metrics::MagnitudeMetric magnitude(o.coarse_resolution);
