@@ -8,6 +8,7 @@
 #include <nlopt.hpp>
 
 #include "image/image.h"
+#include "metrics/aligned.h"
 
 namespace proctex::search {
 namespace {
@@ -142,6 +143,20 @@ void polish(const LinearModel& model, const ColourTarget& target, std::vector<do
   similarity = context.best;
 }
 
+// The target's pixels moved to where `render` has the same pattern (metrics/aligned.h's best
+// circular shift): what a least-squares colour fit should reproduce pixel for pixel.
+std::vector<float> registered_pixels(const ColourTarget& target, const Image& render) {
+  const metrics::AlignedMetric aligned(target.resolution);
+  const auto [dx, dy] = aligned.best_shift(aligned.features(target.rgb, target.resolution).values,
+                                           aligned.features(render, target.resolution).values);
+  const int n = target.resolution;
+  std::vector<float> wanted(3 * size_t(n) * n);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      std::copy_n(target.rgb.pixel((x + dx) % n, (y + dy) % n), 3, &wanted[3 * (size_t(y) * n + x)]);
+  return wanted;
+}
+
 }  // namespace
 
 ColourTarget make_colour_target(const Image& image, int resolution) {
@@ -166,7 +181,8 @@ long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& 
 
 std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vector<std::vector<float>>& packed,
                                          const std::vector<uint32_t>& seeds, const std::vector<std::string>& pinned,
-                                         const ColourTarget& target, Renderer& renderer, bool polish_fit) {
+                                         const ColourTarget& target, Renderer& renderer, bool polish_fit,
+                                         bool registered) {
   const auto colours = free_colours(decl, pinned);
   const size_t k = colours.size();
   // One launch: per start, all free colours black, each colour grey alone, and the start itself.
@@ -236,6 +252,16 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
     r.preview = actual;
     r.before = r.after = colour_similarity(target, actual);
     if (r.linearity_error > 2e-3 * peak) {
+      results.push_back(std::move(r));
+      continue;
+    }
+    if (registered) {
+      r.fitted = true;
+      const auto colours_ls = model.solve(registered_pixels(target, actual));
+      r.preview = model.combine(colours_ls);
+      r.after = colour_similarity(target, r.preview);
+      for (size_t j = 0; j < k; ++j)
+        for (int ch = 0; ch < 3; ++ch) r.packed[colours[j]->offset + ch] = float(colours_ls[3 * j + ch]);
       results.push_back(std::move(r));
       continue;
     }

@@ -45,9 +45,16 @@ struct ColourFitResult {
 // Fits the free colours (searchable, not in `pinned`) of each start; all bases are rendered in
 // one launch at the target's resolution (so `packed.size() * (K + 3)` renders). `polish` adds an
 // NLopt pass on the colour metric (about a thousand cheap evaluations, no renders).
+//
+// `registered`: instead of matching histograms, register each start's render with the target
+// (the best circular shift of metrics/aligned.h) and solve the colours by least squares on the
+// pixels. For a shape that is already exact (the align stage of a deterministic pattern) the
+// pixels give the colours exactly where the histogram fit is only close; for a texture (no pixel
+// correspondence) it is meaningless. The result is kept whether or not the colour metric agrees.
 std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vector<std::vector<float>>& packed,
                                          const std::vector<uint32_t>& seeds, const std::vector<std::string>& pinned,
-                                         const ColourTarget& target, Renderer& renderer, bool polish);
+                                         const ColourTarget& target, Renderer& renderer, bool polish,
+                                         bool registered = false);
 
 // Renders fit_colours spends for `starts` starting points of `decl`.
 long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts);
