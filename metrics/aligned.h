@@ -15,6 +15,7 @@
 //   colours by a mask is affine in the mask, so colours drop out and the search only moves the
 //   shape; the colour fit (search/colour_fit.h) sets the colours afterwards.
 // Distance: sqrt(min over shifts of sum_k (|x_k|^2 + |y_k|^2) / 2 * (1 - r_k(shift)^2) / (3 N)),
+// the minimum refined between whole-pixel shifts by a parabola per axis,
 // with x_k, y_k the zero-mean components, r_k their correlation at that shift, N pixels:
 // symmetric, 0 for the same image at any circular shift and in any two colours.
 // Not a texture similarity: two seeds of a noise differ everywhere in it.

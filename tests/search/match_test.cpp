@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -160,6 +161,32 @@ TEST(Match, FourPointedStarIsAStarWithExactlyFourPoints) {
     EXPECT_NEAR(param(r, "fg")[c].get<double>(), fg[c], 0.1) << "channel " << c << describe(r);
     EXPECT_NEAR(param(r, "bg")[c].get<double>(), bg[c], 0.1) << "channel " << c << describe(r);
   }
+  EXPECT_EQ(r.verdict, "good") << describe(r);
+}
+
+// Issue 12's exactness: a clean shape comes back with every continuous parameter within 2% of its
+// declared range and its colours within 0.02, so that its render is the target's image (RMS
+// difference under 1% of the colour range). Against the catalogue of 48 samples per shader the
+// statistics left such a ring a few % off (RMS 0.014; docs/match-evaluation.md); with this test
+// catalogue's 200 circles they already come close, and the align stage (metrics/aligned.h) must
+// keep it that way.
+TEST(Match, AThinSoftRingComesBackWithinTwoPercent) {
+  const Image target = render("circle:size=0.66,ring=0.88,softness=0.03,fg=(0.08,0.5,0.12),bg=(0.29,0.05,0.52),seed=9005");
+  const MatchResult r = match_image(target);
+  ASSERT_EQ(r.spec.shader, "circle") << describe(r);
+  const std::vector<std::tuple<std::string, double, double>> expected = {
+      {"size", 0.66, 0.9}, {"ring", 0.88, 1.0}, {"softness", 0.03, 0.5}};
+  for (const auto& [name, value, range] : expected)
+    EXPECT_NEAR(param(r, name).get<double>(), value, 0.02 * range) << name << describe(r);
+  const std::vector<double> fg = {0.08, 0.5, 0.12}, bg = {0.29, 0.05, 0.52};
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(param(r, "fg")[c].get<double>(), fg[c], 0.02) << "channel " << c << describe(r);
+    EXPECT_NEAR(param(r, "bg")[c].get<double>(), bg[c], 0.02) << "channel " << c << describe(r);
+  }
+  const Image matched = render(r.spec);
+  double sum = 0;
+  for (size_t i = 0; i < matched.pixels.size(); ++i) sum += std::pow(matched.pixels[i] - target.pixels[i], 2);
+  EXPECT_LT(std::sqrt(sum / double(matched.pixels.size())), 0.01) << describe(r);
   EXPECT_EQ(r.verdict, "good") << describe(r);
 }
 
