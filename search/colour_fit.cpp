@@ -45,13 +45,15 @@ struct LinearModel {
   }
 
   // Least-squares colours that make the model reproduce `wanted` (3 floats per pixel), per channel.
-  std::vector<double> solve(const std::vector<float>& wanted) const {
+  // `mask` (optional, one byte per pixel): only the pixels where it is non-zero count.
+  std::vector<double> solve(const std::vector<float>& wanted, const std::vector<uint8_t>* mask = nullptr) const {
     const size_t k = weights.size();
     std::vector<double> colours(3 * k, 0.0);
     for (int ch = 0; ch < 3; ++ch) {
       Eigen::MatrixXd ata = Eigen::MatrixXd::Zero(k, k);
       Eigen::VectorXd atb = Eigen::VectorXd::Zero(k);
       for (size_t i = 0; i < pixels(); ++i) {
+        if (mask && !(*mask)[i]) continue;
         const size_t at = 3 * i + ch;
         const double residual = wanted[at] - offset.pixels[at];
         for (size_t a = 0; a < k; ++a) {
@@ -144,16 +146,22 @@ void polish(const LinearModel& model, const ColourTarget& target, std::vector<do
 }
 
 // The target's pixels moved to where `render` has the same pattern (metrics/aligned.h's best
-// circular shift): what a least-squares colour fit should reproduce pixel for pixel.
-std::vector<float> registered_pixels(const ColourTarget& target, const Image& render) {
+// shift): what a least-squares colour fit should reproduce pixel for pixel, on `overlap` (the
+// render's pixels that the shifted target covers).
+std::vector<float> registered_pixels(const ColourTarget& target, const Image& render, std::vector<uint8_t>& overlap) {
   const metrics::AlignedMetric aligned(target.resolution);
   const auto [dx, dy] = aligned.best_shift(aligned.features(target.rgb, target.resolution).values,
                                            aligned.features(render, target.resolution).values);
   const int n = target.resolution;
-  std::vector<float> wanted(3 * size_t(n) * n);
+  std::vector<float> wanted(3 * size_t(n) * n, 0.0f);
+  overlap.assign(size_t(n) * n, 0);
   for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x)
-      std::copy_n(target.rgb.pixel((x + dx) % n, (y + dy) % n), 3, &wanted[3 * (size_t(y) * n + x)]);
+    for (int x = 0; x < n; ++x) {
+      const int tx = x + dx, ty = y + dy;
+      if (tx < 0 || ty < 0 || tx >= n || ty >= n) continue;
+      std::copy_n(target.rgb.pixel(tx, ty), 3, &wanted[3 * (size_t(y) * n + x)]);
+      overlap[size_t(y) * n + x] = 1;
+    }
   return wanted;
 }
 
@@ -257,7 +265,9 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
     }
     if (registered) {
       r.fitted = true;
-      const auto colours_ls = model.solve(registered_pixels(target, actual));
+      std::vector<uint8_t> overlap;
+      const auto wanted = registered_pixels(target, actual, overlap);
+      const auto colours_ls = model.solve(wanted, &overlap);
       r.preview = model.combine(colours_ls);
       r.after = colour_similarity(target, r.preview);
       for (size_t j = 0; j < k; ++j)
