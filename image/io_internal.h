@@ -1,0 +1,17 @@
+#pragma once
+// Helpers shared by image.cpp and io.cpp (internal to image/).
+#include <filesystem>
+#include <string>
+
+namespace proctex::detail {
+
+std::string quoted(const std::filesystem::path& path);
+std::string lower_extension(const std::filesystem::path& path);
+// True when the file starts with the PNG signature.
+bool is_png_file(const std::filesystem::path& path);
+// Throws proctex::Error when the target's directory does not exist.
+void check_parent_directory(const std::filesystem::path& path);
+// An empty, uniquely named file beside `target` with the same extension.
+std::filesystem::path create_temporary(const std::filesystem::path& target);
+
+}  // namespace proctex::detail
