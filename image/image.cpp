@@ -18,6 +18,7 @@
 #include "image/backend.h"
 #include "image/io.h"
 #include "image/io_internal.h"
+#include "image/jpeg_codec.h"
 #include "image/png_codec.h"
 
 namespace proctex {
@@ -51,6 +52,21 @@ void linearise(std::vector<float>& values, PixelType type) {
     for (float& v : values) {
       v = table[std::clamp(static_cast<int>(std::lrint(v * scale)), 0, levels - 1)];
     }
+  }
+}
+
+// Rows of 8/16-bit codes, `channels` per pixel, into linear RGB. Grey and grey+alpha: channel 0
+// to all three; alpha is dropped (never premultiplied).
+template <class T>
+void codes_to_linear(Image& image, int y0, int rows, const T* codes, int channels, const std::vector<float>& t) {
+  const size_t n = size_t(rows) * image.width;
+  float* dst = image.pixel(0, y0);
+  if (channels >= 3) {
+    for (size_t i = 0; i < n; ++i, codes += channels, dst += 3) {
+      dst[0] = t[codes[0]], dst[1] = t[codes[1]], dst[2] = t[codes[2]];
+    }
+  } else {
+    for (size_t i = 0; i < n; ++i, codes += channels, dst += 3) dst[0] = dst[1] = dst[2] = t[codes[0]];
   }
 }
 
@@ -186,57 +202,48 @@ Image load_image(const fs::path& path, const ImageLimits& limits) {
   if (fs::file_size(path, ec) == 0 && !ec) throw fail("the file is empty");
 
   Image image;
-  if (detail::is_png_file(path)) {
-    // PNG: libpng, codes straight through the sRGB table (no float round trip).
+  const detail::Format format = detail::sniff(path);
+  if (format == detail::Format::Png || format == detail::Format::Jpeg) {
+    // PNG (libpng) and JPEG (libjpeg): codes straight through the sRGB table, no float round trip.
     std::FILE* file = std::fopen(path.c_str(), "rb");
     if (!file) throw fail(std::strerror(errno), "check the file's permissions");
-    png::Source source;
-    source.file = file;
-    int channels = 0;
-    const std::vector<float>* table = nullptr;
+    int channels = 0, bits = 8;
+    auto on_header = [&](int w, int h, int c, int depth) {
+      // Only the header has been read so far: reject absurd sizes before allocating anything.
+      try {
+        check_dimensions(w, h, limits);
+      } catch (const Error& e) {
+        throw fail(e.message(), e.hint());
+      }
+      channels = c, bits = depth;
+      image = Image(w, h);
+    };
+    auto on_rows = [&](int y0, int rows, const unsigned char* data) {
+      if (bits == 16) {
+        codes_to_linear(image, y0, rows, reinterpret_cast<const uint16_t*>(data), channels, srgb_table(16));
+      } else {
+        codes_to_linear(image, y0, rows, data, channels, srgb_table(8));
+      }
+    };
     std::string problem;
     try {
-      problem = png::decode(
-          source,
-          [&](const png::Header& h) {
-            // Only the header has been read so far: reject absurd sizes before allocating anything.
-            try {
-              check_dimensions(h.width, h.height, limits);
-            } catch (const Error& e) {
-              throw fail(e.message(), e.hint());
-            }
-            channels = h.channels;
-            table = &srgb_table(h.bit_depth);
-            image = Image(h.width, h.height);
-          },
-          [&](int y0, int rows, const unsigned char* data) {
-            // Grey and grey+alpha: channel 0 to all three; alpha is dropped (never premultiplied).
-            const int take = channels >= 3 ? 3 : 1;
-            const size_t n = size_t(rows) * image.width;
-            float* dst = image.pixel(0, y0);
-            const std::vector<float>& t = *table;
-            auto convert = [&](auto* codes) {
-              for (size_t i = 0; i < n; ++i, codes += channels, dst += 3) {
-                if (take == 3) {
-                  dst[0] = t[codes[0]], dst[1] = t[codes[1]], dst[2] = t[codes[2]];
-                } else {
-                  dst[0] = dst[1] = dst[2] = t[codes[0]];
-                }
-              }
-            };
-            if (table == &srgb_table(16)) {
-              convert(reinterpret_cast<const uint16_t*>(data));
-            } else {
-              convert(data);
-            }
-          });
+      if (format == detail::Format::Png) {
+        png::Source source;
+        source.file = file;
+        problem = png::decode(
+            source, [&](const png::Header& h) { on_header(h.width, h.height, h.channels, h.bit_depth); }, on_rows);
+      } else {
+        problem = jpeg::decode(
+            file, [&](const jpeg::Header& h) { on_header(h.width, h.height, h.channels, 8); }, on_rows);
+      }
     } catch (...) {
       std::fclose(file);
       throw;
     }
     std::fclose(file);
-    if (!problem.empty()) throw fail(problem);
-    return image;
+    if (problem.empty()) return image;
+    if (problem != jpeg::kUnsupported) throw fail(problem);
+    image = Image();  // a CMYK JPEG: OpenImageIO converts it
   }
 
   // Every other format: the OpenImageIO module. Colour is kept unassociated: OIIO would otherwise

@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "image/backend.h"
 #include "image/io_internal.h"
+#include "image/jpeg_codec.h"
 #include "image/png_codec.h"
 
 namespace proctex {
@@ -31,13 +32,15 @@ std::string lower_extension(const fs::path& path) {
   return ext;
 }
 
-bool is_png_file(const fs::path& path) {
+Format sniff(const fs::path& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return false;
+  if (!f) return Format::Other;
   std::array<unsigned char, 8> head{};
   const size_t n = std::fread(head.data(), 1, head.size(), f);
   std::fclose(f);
-  return png::has_signature(std::span<const unsigned char>(head.data(), n));
+  if (png::has_signature(std::span<const unsigned char>(head.data(), n))) return Format::Png;
+  if (jpeg::has_signature(head.data(), n)) return Format::Jpeg;
+  return Format::Other;
 }
 
 void check_parent_directory(const fs::path& path) {
@@ -116,6 +119,27 @@ ChannelImage read_png(const png::Source& source, const std::string& what, const 
   return out;
 }
 
+// Reads a JPEG into float codes / 255; empty for colour spaces left to OpenImageIO (CMYK).
+ChannelImage read_jpeg(std::FILE* file, const std::string& what, const ImageLimits& limits) {
+  ChannelImage out;
+  const std::string problem = jpeg::decode(
+      file,
+      [&](const jpeg::Header& h) {
+        check_dimensions(h.width, h.height, limits);
+        out.width = h.width, out.height = h.height, out.channels = h.channels;
+        out.channel_names = default_names(h.channels);
+        out.data.resize(size_t(h.width) * h.height * h.channels);
+      },
+      [&](int y0, int rows, const unsigned char* data) {
+        const size_t n = size_t(rows) * out.width * out.channels;
+        float* dst = out.data.data() + size_t(y0) * out.width * out.channels;
+        for (size_t i = 0; i < n; ++i) dst[i] = float(data[i]) / 255.0f;
+      });
+  if (problem == jpeg::kUnsupported) return {};
+  if (!problem.empty()) throw Error(what + ": " + problem, "check that the file is a complete JPEG image");
+  return out;
+}
+
 // The raw bytes a PNG encoder needs: `data` as is when it already has the file's type, else
 // float values in [0, 1] scaled to codes.
 const void* as_png_codes(PixelType file_type, PixelType data_type, const void* data, size_t count,
@@ -145,15 +169,21 @@ ChannelImage read_channels(const fs::path& path, const ImageLimits& limits) {
     throw Error(what + ": " + (fs::exists(path, ec) ? "not a regular file" : "file not found"), "check the path");
   }
   if (fs::file_size(path, ec) == 0 && !ec) throw Error(what + ": the file is empty", "check the path");
-  if (detail::is_png_file(path)) {
+  const detail::Format format = detail::sniff(path);
+  if (format == detail::Format::Png || format == detail::Format::Jpeg) {
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) throw Error(what + ": " + std::strerror(errno), "check the file's permissions");
-    png::Source source;
-    source.file = f;
     try {
-      ChannelImage out = read_png(source, what, limits);
+      if (format == detail::Format::Png) {
+        png::Source source;
+        source.file = f;
+        ChannelImage out = read_png(source, what, limits);
+        std::fclose(f);
+        return out;
+      }
+      ChannelImage out = read_jpeg(f, what, limits);
       std::fclose(f);
-      return out;
+      if (!out.data.empty()) return out;
     } catch (...) {
       std::fclose(f);
       throw;

@@ -1,9 +1,10 @@
 #pragma once
 // Image files beyond load_image/save_image: any number of channels, files written strip by strip,
 // PNG in memory, animated GIF. The only place in proctex that knows which library reads a format:
-// PNG goes through libpng (linked into the binary); every other format through OpenImageIO in a
-// plug-in module (proctex_image_oiio.so) that is loaded with dlopen on first use, so a command
-// that only touches PNG never maps OpenImageIO's ~265 libraries (docs/architecture.md).
+// PNG goes through libpng and JPEG reading through libjpeg (both linked into the binary); every
+// other format through OpenImageIO in a plug-in module (proctex_image_oiio.so) that is loaded with
+// dlopen on first use, so a command that only touches PNG (and reads JPEG) never maps
+// OpenImageIO's ~265 libraries (docs/architecture.md, "Start-up").
 // All writers are atomic: a temporary file beside the target, renamed into place when complete.
 #include <cstdint>
 #include <filesystem>

@@ -100,6 +100,8 @@ TEST(ImageBackend, PngWorkDoesNotLoadOpenImageIo) {
   const Image brick = proctex::load_image(kTextures / "brick.png");
   proctex::save_image(brick, dir / "b.png");
   proctex::read_channels(dir / "b.png");
+  const Image hubble = proctex::load_image(kTextures / "hubble_deep_field.jpg");  // libjpeg
+  EXPECT_GT(hubble.width, 0);
   EXPECT_FALSE(proctex::image_backend_loaded());
   EXPECT_FALSE(mapped("libOpenImageIO"));
 }
@@ -220,6 +222,26 @@ TEST(PngCodec, CorruptAndTruncatedFilesAreClearErrors) {
   // Nothing of a failed load reaches the module: PNG errors are ours.
   if (!loaded_before) {
     EXPECT_FALSE(proctex::image_backend_loaded());
+  }
+}
+
+TEST(JpegCodec, TruncatedAndCorruptJpegsAreClearErrorsAndReadChannelsMatchesLoad) {
+  TempDir dir;
+  const std::string bytes = read_bytes(kTextures / "hubble_deep_field.jpg");
+  write_bytes(dir / "cut.jpg", bytes.substr(0, bytes.size() / 2));
+  std::string m = error_of([&] { proctex::load_image(dir / "cut.jpg"); });
+  EXPECT_NE(m.find("cut.jpg"), std::string::npos) << m;
+  EXPECT_NE(m.find("truncated JPEG"), std::string::npos) << m;
+  write_bytes(dir / "head.jpg", bytes.substr(0, 300));
+  m = error_of([&] { proctex::read_channels(dir / "head.jpg"); });
+  EXPECT_NE(m.find("JPEG"), std::string::npos) << m;
+  // The same decoder behind both calls: read_channels' code / 255 linearises to load_image's pixel.
+  const Image img = proctex::load_image(kTextures / "hubble_deep_field.jpg");
+  const ChannelImage raw = proctex::read_channels(kTextures / "hubble_deep_field.jpg");
+  ASSERT_EQ(raw.width, img.width);
+  ASSERT_EQ(raw.channels, 3);
+  for (size_t i = 0; i < img.pixels.size(); i += 997) {
+    ASSERT_FLOAT_EQ(img.pixels[i], proctex::srgb_to_linear(std::round(raw.data[i] * 255) / 255)) << i;
   }
 }
 
