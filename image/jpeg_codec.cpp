@@ -3,6 +3,7 @@
 #include "image/jpeg_codec.h"
 
 #include <jpeglib.h>
+#include <jerror.h>
 
 #include <algorithm>
 #include <csetjmp>
@@ -92,7 +93,7 @@ std::string decode(std::FILE* file, const std::function<void(const Header&)>& on
   const size_t row_bytes = size_t(h.width) * h.channels;
   const int strip = int(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(row_bytes, 1), 1, 64));
   std::vector<unsigned char> buffer(row_bytes * size_t(strip));
-  std::vector<JSAMPROW> rows(size_t(strip));
+  std::vector<JSAMPROW> rows(static_cast<size_t>(strip));
   for (int r = 0; r < strip; ++r) rows[size_t(r)] = buffer.data() + size_t(r) * row_bytes;
   int y = 0;
   while (y < h.height) {
