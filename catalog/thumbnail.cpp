@@ -33,8 +33,8 @@ Image decode_png(std::span<const unsigned char> png) {
   Image img(decoded.width, decoded.height);
   for (size_t i = 0; i < size_t(decoded.width) * decoded.height; ++i)
     for (int c = 0; c < 3; ++c) {
-      // 8-bit thumbnails: the code k was stored as k / 255; 16-bit ones are taken as they are.
-      img.pixels[3 * i + c] = srgb_to_linear(decoded.data[i * n + std::min(c, n - 1)]);
+      // Thumbnails are 8-bit: back to the code k, then k / 255 as before.
+      img.pixels[3 * i + c] = srgb_to_linear(std::round(decoded.data[i * n + std::min(c, n - 1)] * 255.0f) / 255.0f);
     }
   return img;
 }

@@ -110,9 +110,9 @@ ChannelImage read_png(const png::Source& source, const std::string& what, const 
         float* dst = out.data.data() + size_t(y0) * out.width * out.channels;
         if (out.file_type == PixelType::UInt16) {
           const auto* words = reinterpret_cast<const uint16_t*>(data);
-          for (size_t i = 0; i < n; ++i) dst[i] = float(words[i]) / 65535.0f;
+          for (size_t i = 0; i < n; ++i) dst[i] = float(words[i]) * (1.0f / 65535.0f);  // as OpenImageIO
         } else {
-          for (size_t i = 0; i < n; ++i) dst[i] = float(data[i]) / 255.0f;
+          for (size_t i = 0; i < n; ++i) dst[i] = float(data[i]) * (1.0f / 255.0f);
         }
       });
   if (!problem.empty()) throw Error(what + ": " + problem, "check that the file is a complete PNG image");
@@ -133,7 +133,7 @@ ChannelImage read_jpeg(std::FILE* file, const std::string& what, const ImageLimi
       [&](int y0, int rows, const unsigned char* data) {
         const size_t n = size_t(rows) * out.width * out.channels;
         float* dst = out.data.data() + size_t(y0) * out.width * out.channels;
-        for (size_t i = 0; i < n; ++i) dst[i] = float(data[i]) / 255.0f;
+        for (size_t i = 0; i < n; ++i) dst[i] = float(data[i]) * (1.0f / 255.0f);
       });
   if (problem == jpeg::kUnsupported) return {};
   if (!problem.empty()) throw Error(what + ": " + problem, "check that the file is a complete JPEG image");
