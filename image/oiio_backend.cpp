@@ -93,14 +93,18 @@ class OiioWriter final : public Writer {
     take_errors(out_.get());
   }
   bool write_rows(int y0, int y1, PixelType data_type, const void* data, std::string& error) override {
-    if (out_->write_scanlines(y0, y1, 0, oiio_type(data_type), data) && !out_->has_error()) return true;
+    // Return values decide: OpenImageIO's TIFF writer records "failed TIFFWriteCustomDirectory() of
+    // the Exif data" for files without an sRGB colour space and still writes a good file.
+    if (out_->write_scanlines(y0, y1, 0, oiio_type(data_type), data)) return true;
     error = take_errors(out_.get());
     return false;
   }
   bool close(std::string& error) override {
     open_ = false;
-    const bool ok = out_->close();
-    if (ok && !out_->has_error()) return true;
+    if (out_->close()) {
+      take_errors(out_.get());  // drop recorded warnings (see write_rows)
+      return true;
+    }
     error = take_errors(out_.get());
     return false;
   }
@@ -182,7 +186,10 @@ class OiioBackend final : public Backend {
         ok = ok && out->write_image(OIIO::TypeDesc::UINT8, frames[f].data());
       }
       ok = out->close() && ok;
-      if (ok && !out->has_error()) return true;
+      if (ok) {
+        take_errors(out.get());
+        return true;
+      }
       error = take_errors(out.get());
       return false;
     } catch (const std::exception& e) {
