@@ -96,7 +96,7 @@ Backend& get(const std::string& purpose) {
   const Loaded& l = loaded();
   if (!l.backend) {
     throw Error(purpose + ": the OpenImageIO module is unavailable: " + l.problem,
-                "formats other than PNG need proctex_image_oiio.so beside the proctex binary, in "
+                "EXR, TIFF, GIF and JPEG output need proctex_image_oiio.so beside the proctex binary, in "
                 "../lib/proctex/, or named by PROCTEX_IMAGE_BACKEND; rebuild or reinstall proctex");
   }
   return *l.backend;
