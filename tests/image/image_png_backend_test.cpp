@@ -356,3 +356,25 @@ TEST(ImageBackend, TheBinaryWritesExrAndAMissingModuleIsOneClearError) {
   for (const auto& e : fs::directory_iterator(dir.path()))
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
+
+TEST(ImageBackend, AnInstalledBinaryUsesTheModuleOfItsInstallLayout) {
+  // bin/proctex + lib/proctex/proctex_image_oiio.so (what `cmake --install` lays out): the module
+  // beside the install wins over the build tree's; LD_DEBUG=files names the object dlopen mapped.
+  TempDir dir;
+  fs::create_directories(dir / "bin");
+  fs::create_directories(dir.path() / "lib" / "proctex");
+  fs::copy_file(PROCTEX_BINARY, dir / "bin/proctex");
+  fs::permissions(dir / "bin/proctex", fs::perms::owner_exec, fs::perm_options::add);
+  const fs::path module = fs::path(PROCTEX_BINARY).parent_path().parent_path() / "image" / "proctex_image_oiio.so";
+  ASSERT_TRUE(fs::exists(module)) << module;
+  fs::copy_file(module, dir.path() / "lib" / "proctex" / "proctex_image_oiio.so");
+  const std::string cmd = "LD_DEBUG=files '" + (dir / "bin/proctex").string() + "' -q render stripes -o '" +
+                          (dir / "x.exr").string() + "' --size 8 2>'" + (dir / "ld.txt").string() + "'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_bytes(dir / "ld.txt");
+  const std::string ld = read_bytes(dir / "ld.txt");
+  EXPECT_NE(ld.find("file=" + (dir.path() / "lib" / "proctex" / "proctex_image_oiio.so").string()),
+            std::string::npos)
+      << ld.substr(0, 2000);
+  EXPECT_EQ(ld.find("file=" + module.string()), std::string::npos);
+  EXPECT_EQ(proctex::load_image(dir / "x.exr").width, 8);
+}
