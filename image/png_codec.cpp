@@ -6,6 +6,7 @@
 #include <png.h>
 
 #include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <csetjmp>
 #include <cstring>
@@ -74,7 +75,8 @@ bool guarded_read_info(png_structp png, png_infop info, int* passes) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_read_info(png, info);
   png_set_expand(png);  // palette -> RGB, grey < 8 bits -> 8, tRNS -> alpha
-  if (png_get_bit_depth(png, info) == 16) png_set_swap(png);  // native order (little-endian hosts)
+  // 16-bit samples in native order (PNG stores them big-endian).
+  if (png_get_bit_depth(png, info) == 16 && std::endian::native == std::endian::little) png_set_swap(png);
   *passes = png_set_interlace_handling(png);
   png_read_update_info(png, info);
   return true;
@@ -101,7 +103,7 @@ bool guarded_write_info(png_structp png, png_infop info, const Header* h, int le
   if (level >= 0) png_set_compression_level(png, std::clamp(level, 0, 9));
   if (srgb) png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
   png_write_info(png, info);
-  if (h->bit_depth == 16) png_set_swap(png);
+  if (h->bit_depth == 16 && std::endian::native == std::endian::little) png_set_swap(png);
   return true;
 }
 
