@@ -8,7 +8,7 @@
 namespace proctex::catalog {
 
 std::vector<unsigned char> encode_png(const Image& linear_rgb);
-// Throws proctex::Error for bytes that are not a PNG OpenImageIO can read.
+// Throws proctex::Error for bytes that are not a readable PNG.
 Image decode_png(std::span<const unsigned char> png);
 
 }  // namespace proctex::catalog

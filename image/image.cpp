@@ -1,15 +1,13 @@
-// Image I/O through OpenImageIO and the few pixel operations every folder needs.
+// Image I/O (PNG through libpng, other formats through the OpenImageIO module, image/io.h) and
+// the few pixel operations every folder needs.
 #include "image/image.h"
-
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <system_error>
@@ -17,85 +15,20 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "image/backend.h"
+#include "image/io.h"
+#include "image/io_internal.h"
+#include "image/jpeg_codec.h"
+#include "image/png_codec.h"
 
 namespace proctex {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
-
-// OIIO error strings can span several lines; our errors are one line.
-std::string one_line(std::string text) {
-  std::replace(text.begin(), text.end(), '\n', ' ');
-  while (!text.empty() && text.back() == ' ') text.pop_back();
-  return text.empty() ? "unknown OpenImageIO error" : text;
-}
-
-// Collects (and thereby clears) every pending OIIO message, so OIIO never prints "pending error"
-// warnings on stderr later and the user sees the cause in our message instead.
-template <class Io>
-std::string take_errors(const Io* io) {
-  std::string text = io ? io->geterror() : std::string();
-  std::string global = OIIO::geterror();
-  if (!global.empty()) text += (text.empty() ? "" : "; ") + global;
-  return one_line(text);
-}
+using detail::quoted;
 
 const char* kLoadHint = "check that the file is a complete PNG, JPEG, TIFF or EXR image";
-
-// --- PNG pre-check. libpng, called by OIIO 2.4, prints "libpng error: ..." on stderr before OIIO
-// records the error, so a broken PNG would spam the terminal. Walking the chunk list first
-// (lengths, CRCs, IEND) reports truncated and corrupted files quietly; only a crafted file with
-// valid CRCs around a bad zlib stream still reaches libpng.
-uint32_t crc32_update(uint32_t crc, const unsigned char* data, size_t n) {
-  static const std::array<uint32_t, 256> table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  for (size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xff] ^ (crc >> 8);
-  return crc;
-}
-
-uint32_t read_be32(const unsigned char* p) {
-  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
-}
-
-// Returns what is wrong with the PNG's chunk structure, "" if it looks whole (or is not a PNG).
-std::string png_structure_problem(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char head[8];
-  if (!in.read(reinterpret_cast<char*>(head), 8) ||
-      std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) != 0) {
-    return {};
-  }
-  std::vector<unsigned char> buffer(1 << 16);
-  while (true) {
-    unsigned char header[8];
-    if (!in.read(reinterpret_cast<char*>(header), 8)) return "truncated PNG (no IEND chunk)";
-    const std::string type(reinterpret_cast<char*>(header) + 4, 4);
-    uint32_t remaining = read_be32(header), crc = crc32_update(0xffffffffu, header + 4, 4);
-    while (remaining > 0) {
-      const size_t n = std::min<size_t>(remaining, buffer.size());
-      if (!in.read(reinterpret_cast<char*>(buffer.data()), n)) {
-        return "truncated PNG (chunk " + type + " is cut off)";
-      }
-      crc = crc32_update(crc, buffer.data(), n);
-      remaining -= uint32_t(n);
-    }
-    unsigned char stored[4];
-    if (!in.read(reinterpret_cast<char*>(stored), 4)) {
-      return "truncated PNG (chunk " + type + " is cut off)";
-    }
-    if (read_be32(stored) != ~crc) return "corrupt PNG (checksum mismatch in chunk " + type + ")";
-    if (type == "IEND") return {};
-  }
-}
 
 // Lookup tables make linearising a 4096^2 photo cost no pow() calls.
 std::vector<float> srgb_decode_table(int levels) {
@@ -104,15 +37,36 @@ std::vector<float> srgb_decode_table(int levels) {
   return table;
 }
 
-// OIIO delivers integer files as float k/(2^bits-1); undo that scale exactly and look up.
-void linearise(std::vector<float>& values, OIIO::TypeDesc format) {
-  if (!format.is_floating_point()) {
-    const int levels = format.basetype == OIIO::TypeDesc::UINT8 ? 256 : 65536;
-    const std::vector<float> table = srgb_decode_table(levels);
+// The decoding table of 8- or 16-bit sRGB codes, built once.
+const std::vector<float>& srgb_table(int bits) {
+  static const std::vector<float> t8 = srgb_decode_table(256), t16 = srgb_decode_table(65536);
+  return bits == 16 ? t16 : t8;
+}
+
+// The backend delivers integer files as float k/(2^bits-1); undo that scale exactly and look up.
+void linearise(std::vector<float>& values, PixelType type) {
+  if (type == PixelType::UInt8 || type == PixelType::UInt16) {
+    const int levels = type == PixelType::UInt8 ? 256 : 65536;
+    const std::vector<float>& table = srgb_table(type == PixelType::UInt8 ? 8 : 16);
     const float scale = float(levels - 1);
     for (float& v : values) {
       v = table[std::clamp(static_cast<int>(std::lrint(v * scale)), 0, levels - 1)];
     }
+  }
+}
+
+// Rows of 8/16-bit codes, `channels` per pixel, into linear RGB. Grey and grey+alpha: channel 0
+// to all three; alpha is dropped (never premultiplied).
+template <class T>
+void codes_to_linear(Image& image, int y0, int rows, const T* codes, int channels, const std::vector<float>& t) {
+  const size_t n = size_t(rows) * image.width;
+  float* dst = image.pixel(0, y0);
+  if (channels >= 3) {
+    for (size_t i = 0; i < n; ++i, codes += channels, dst += 3) {
+      dst[0] = t[codes[0]], dst[1] = t[codes[1]], dst[2] = t[codes[2]];
+    }
+  } else {
+    for (size_t i = 0; i < n; ++i, codes += channels, dst += 3) dst[0] = dst[1] = dst[2] = t[codes[0]];
   }
 }
 
@@ -163,99 +117,6 @@ std::vector<T> encode_srgb(const Image& image) {
   return out;
 }
 
-// The file's pixel format and the buffer handed to OIIO, chosen by extension. Integer files get
-// sRGB codes we round ourselves; EXR gets our linear floats, which OIIO converts to half.
-struct Encoded {
-  OIIO::ImageSpec spec;
-  OIIO::TypeDesc data_format;
-  std::vector<uint8_t> bytes;
-  std::vector<uint16_t> words;
-  const float* floats = nullptr;
-  const void* data() const {
-    return !bytes.empty() ? static_cast<const void*>(bytes.data())
-           : !words.empty() ? static_cast<const void*>(words.data())
-                            : static_cast<const void*>(floats);
-  }
-};
-
-// data() is null for an extension we do not write.
-Encoded encode_for_file(const Image& image, const std::string& ext) {
-  Encoded e;
-  e.spec = OIIO::ImageSpec(image.width, image.height, 3);
-  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
-    e.bytes = encode_srgb<uint8_t>(image);
-    e.data_format = OIIO::TypeDesc::UINT8;
-    if (ext != ".png") e.spec.attribute("Compression", "jpeg:95");
-    // Deflate level 1 instead of libpng's 6: faster to write (with the sRGB table, a 512^2 bricks
-    // render 115 -> 25 ms, bench_image), the file 17 % larger; a morph writes hundreds of frames.
-    else e.spec.attribute("png:compressionLevel", 1);
-  } else if (ext == ".tif" || ext == ".tiff") {
-    e.words = encode_srgb<uint16_t>(image);
-    e.data_format = OIIO::TypeDesc::UINT16;
-  } else if (ext == ".exr") {
-    e.floats = image.pixels.data();
-    e.data_format = OIIO::TypeDesc::FLOAT;
-    e.spec.set_format(OIIO::TypeDesc::HALF);
-    e.spec.attribute("oiio:ColorSpace", "Linear");
-    return e;
-  } else {
-    return e;
-  }
-  e.spec.set_format(e.data_format);
-  e.spec.attribute("oiio:ColorSpace", "sRGB");
-  return e;
-}
-
-// Creates an empty, uniquely named file beside the target (same filesystem, so rename is atomic)
-// that keeps the extension, because OIIO picks the format from it. Creating it ourselves gives
-// the real reason (permission denied, read-only file system) when the directory is unwritable.
-fs::path create_temporary(const fs::path& target) {
-  static std::atomic<unsigned> counter{0};
-  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  for (int attempt = 0;; ++attempt) {
-    const fs::path temp = dir / ("." + target.stem().string() + ".tmp-" +
-                                 std::to_string(getpid()) + "-" + std::to_string(counter++) +
-                                 target.extension().string());
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd >= 0) {
-      ::close(fd);
-      return temp;
-    }
-    if (errno != EEXIST || attempt > 100) {
-      throw Error("cannot save image " + quoted(target) + ": cannot create a file in " +
-                      quoted(dir) + ": " + std::strerror(errno),
-                  "check that the directory is writable and the disk is not full");
-    }
-  }
-}
-
-std::string lower_extension(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
-// Writes `data` (of type `data_format`; OIIO converts to spec.format) to `file`; returns an error
-// text, empty on success.
-std::string write_pixels(const fs::path& file, const OIIO::ImageSpec& spec,
-                         OIIO::TypeDesc data_format, const void* data) {
-  auto out = OIIO::ImageOutput::create(file.string());
-  if (!out) return take_errors<OIIO::ImageOutput>(nullptr);
-  bool ok = out->open(file.string(), spec) && out->write_image(data_format, data);
-  ok = out->close() && ok;
-  return ok && !out->has_error() ? std::string() : take_errors(out.get());
-}
-
-void check_parent_directory(const fs::path& path) {
-  const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) {
-    throw Error("cannot save image " + quoted(path) + ": directory " + quoted(dir) +
-                    " does not exist",
-                "create the directory first or choose another output path");
-  }
-}
-
 float area_overlap(double a0, double a1, double b0, double b1) {
   return float(std::max(0.0, std::min(a1, b1) - std::max(a0, b0)));
 }
@@ -293,8 +154,8 @@ std::string label_font() {
 // font is unavailable (text_size fails), which the caller treats as "no text".
 std::string fit_label(std::string text, int width, int font_size, const std::string& font) {
   auto fits = [&](const std::string& t) {
-    OIIO::ROI roi = OIIO::ImageBufAlgo::text_size(t, font_size, font);
-    return roi.defined() && roi.width() <= width;
+    const int w = backend::get("cannot draw contact-sheet labels").text_width(t, font_size, font);
+    return w >= 0 && w <= width;
   };
   if (text.empty() || fits(text)) return text;
   while (!text.empty()) {
@@ -338,43 +199,74 @@ Image load_image(const fs::path& path, const ImageLimits& limits) {
   if (!fs::is_regular_file(path, ec)) {
     throw fail(fs::exists(path, ec) ? "not a regular file" : "file not found", "check the path");
   }
-  if (const std::string problem = png_structure_problem(path); !problem.empty()) throw fail(problem);
-  // Keep colour unassociated: OIIO would otherwise multiply it by the alpha we are about to drop.
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw fail(take_errors<OIIO::ImageInput>(nullptr));
-  auto close_and_fail = [&](const std::string& reason, const std::string& hint = kLoadHint) {
-    in->close();
-    const std::string oiio = take_errors(in.get());
-    return fail(reason.empty() ? oiio : reason, hint);
-  };
+  if (fs::file_size(path, ec) == 0 && !ec) throw fail("the file is empty");
 
-  // Only the header has been read so far: reject absurd sizes before allocating anything.
-  const OIIO::ImageSpec spec = in->spec();
+  Image image;
+  const detail::Format format = detail::sniff(path);
+  if (format == detail::Format::Png || format == detail::Format::Jpeg) {
+    // PNG (libpng) and JPEG (libjpeg): codes straight through the sRGB table, no float round trip.
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) throw fail(std::strerror(errno), "check the file's permissions");
+    int channels = 0, bits = 8;
+    auto on_header = [&](int w, int h, int c, int depth) {
+      // Only the header has been read so far: reject absurd sizes before allocating anything.
+      try {
+        check_dimensions(w, h, limits);
+      } catch (const Error& e) {
+        throw fail(e.message(), e.hint());
+      }
+      channels = c, bits = depth;
+      image = Image(w, h);
+    };
+    auto on_rows = [&](int y0, int rows, const unsigned char* data) {
+      if (bits == 16) {
+        codes_to_linear(image, y0, rows, reinterpret_cast<const uint16_t*>(data), channels, srgb_table(16));
+      } else {
+        codes_to_linear(image, y0, rows, data, channels, srgb_table(8));
+      }
+    };
+    std::string problem;
+    try {
+      if (format == detail::Format::Png) {
+        png::Source source;
+        source.file = file;
+        problem = png::decode(
+            source, [&](const png::Header& h) { on_header(h.width, h.height, h.channels, h.bit_depth); }, on_rows);
+      } else {
+        problem = jpeg::decode(
+            file, [&](const jpeg::Header& h) { on_header(h.width, h.height, h.channels, 8); }, on_rows);
+      }
+    } catch (...) {
+      std::fclose(file);
+      throw;
+    }
+    std::fclose(file);
+    if (problem.empty()) return image;
+    if (problem != jpeg::kUnsupported) throw fail(problem);
+    image = Image();  // a CMYK JPEG: OpenImageIO converts it
+  }
+
+  // Every other format: the OpenImageIO module. Colour is kept unassociated: OIIO would otherwise
+  // multiply it by the alpha we are about to drop.
+  std::string error;
+  auto in = backend::get("cannot load image " + quoted(path)).open_reader(path.string(), true, error);
+  if (!in) throw fail(error);
+  const backend::Header& spec = in->header();
   try {
     check_dimensions(spec.width, spec.height, limits);
   } catch (const Error& e) {
-    throw close_and_fail(e.message(), e.hint());
+    throw fail(e.message(), e.hint());
   }
-  if (spec.depth > 1 || spec.nchannels < 1) {
-    throw close_and_fail("unsupported layout (" + std::to_string(spec.nchannels) +
-                         " channels, depth " + std::to_string(spec.depth) + ")");
+  if (spec.depth > 1 || spec.channels < 1) {
+    throw fail("unsupported layout (" + std::to_string(spec.channels) + " channels, depth " +
+               std::to_string(spec.depth) + ")");
   }
-
-  Image image(spec.width, spec.height);
+  image = Image(spec.width, spec.height);
   // Grey and grey+alpha: read channel 0 only, straight into the red slot of each pixel.
-  const int channels = spec.nchannels >= 3 ? 3 : 1;
-  const bool ok = in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.pixels.data(),
-                                 3 * sizeof(float));
-  // A truncated JPEG makes read_image return true (the rest is filled grey) and reports the
-  // problem only through has_error(), so both are checked.
-  if (!ok || in->has_error()) throw close_and_fail("");
-  in->close();
-  if (in->has_error()) throw close_and_fail("");
-  take_errors(in.get());  // drop warnings, so OIIO prints nothing later
+  const int channels = spec.channels >= 3 ? 3 : 1;
+  if (!in->read(channels, image.pixels.data(), 3 * sizeof(float), error)) throw fail(error);
   if (channels == 1) expand_grey(image);
-  linearise(image.pixels, spec.format);
+  if (!spec.floating) linearise(image.pixels, spec.type);
   return image;
 }
 
@@ -384,23 +276,30 @@ void save_image(const Image& image, const fs::path& path) {
                     std::to_string(image.width) + "x" + std::to_string(image.height) + ")",
                 "this is a bug in the caller: produce an image before saving it");
   }
-  const Encoded encoded = encode_for_file(image, lower_extension(path));
-  if (!encoded.data()) {
-    throw Error("cannot save image " + quoted(path) + ": unknown extension '" +
-                    path.extension().string() + "'",
+  // The file's pixel type chosen by extension. Integer files get sRGB codes we round ourselves;
+  // EXR gets our linear floats, which OpenImageIO converts to half.
+  const std::string ext = detail::lower_extension(path);
+  WriteOptions options;
+  options.colour_space = "sRGB";
+  if (ext == ".png") {
+    // Deflate level 1 instead of libpng's 6: faster to write (with the sRGB table, a 512^2 bricks
+    // render 115 -> 25 ms, bench_image), the file 17 % larger; a morph writes hundreds of frames.
+    options.png_compression_level = 1;
+    write_channels(path, image.width, image.height, options, PixelType::UInt8, encode_srgb<uint8_t>(image).data());
+  } else if (ext == ".jpg" || ext == ".jpeg") {
+    options.compression = "jpeg:95";
+    write_channels(path, image.width, image.height, options, PixelType::UInt8, encode_srgb<uint8_t>(image).data());
+  } else if (ext == ".tif" || ext == ".tiff") {
+    options.file_type = PixelType::UInt16;
+    write_channels(path, image.width, image.height, options, PixelType::UInt16,
+                   encode_srgb<uint16_t>(image).data());
+  } else if (ext == ".exr") {
+    options.file_type = PixelType::Half;
+    options.colour_space = "Linear";
+    write_channels(path, image.width, image.height, options, PixelType::Float, image.pixels.data());
+  } else {
+    throw Error("cannot save image " + quoted(path) + ": unknown extension '" + path.extension().string() + "'",
                 "use .png, .jpg, .tif or .exr");
-  }
-  check_parent_directory(path);
-
-  const fs::path temp = create_temporary(path);
-  const std::string error = write_pixels(temp, encoded.spec, encoded.data_format, encoded.data());
-  std::error_code rename_error, ignored;
-  if (error.empty()) fs::rename(temp, path, rename_error);
-  if (!error.empty() || rename_error) {
-    fs::remove(temp, ignored);
-    throw Error("cannot save image " + quoted(path) + ": " +
-                    (error.empty() ? rename_error.message() : error),
-                "check that the directory is writable and the disk is not full");
   }
 }
 
@@ -490,9 +389,6 @@ Image contact_sheet(const std::vector<Image>& tiles, const std::vector<std::stri
   check_dimensions(cols * cell_w + margin, rows * cell_h + margin);
   Image sheet(cols * cell_w + margin, rows * cell_h + margin, 0.02f);  // dark grey (sRGB ~0.15)
 
-  // Wrap our pixels so OIIO draws the text straight into the sheet.
-  OIIO::ImageBuf canvas(OIIO::ImageSpec(sheet.width, sheet.height, 3, OIIO::TypeDesc::FLOAT),
-                        sheet.pixels.data());
   const std::string font = label_font();
   const float text_colour[3] = {0.8f, 0.8f, 0.8f};
   for (size_t i = 0; i < tiles.size(); ++i) {
@@ -506,13 +402,12 @@ Image contact_sheet(const std::vector<Image>& tiles, const std::vector<std::stri
     const std::string text =
         i < labels.size() ? fit_label(labels[i], tile_size, font_size, font) : "";
     // A missing font is not worth failing a gallery for: the tiles alone are still useful.
-    if (!text.empty() &&
-        !OIIO::ImageBufAlgo::render_text(canvas, x0, y0 + tile_size + font_size, text, font_size,
-                                         font, text_colour)) {
-      take_errors(&canvas);
+    if (!text.empty()) {
+      backend::get("cannot draw contact-sheet labels")
+          .render_text(sheet.pixels.data(), sheet.width, sheet.height, x0, y0 + tile_size + font_size, text,
+                       font_size, font, text_colour);
     }
   }
-  take_errors(&canvas);
   return sheet;
 }
 

@@ -29,8 +29,9 @@ struct ImageLimits {
   int64_t max_pixels = int64_t(1) << 28;   // 268 M pixels = 3.2 GB as float RGB
 };
 
-// Loads PNG, JPEG, TIFF, EXR (anything OpenImageIO reads). 8/16-bit files are taken as sRGB and
-// linearised; float files (EXR, float TIFF) as linear. Grey becomes RGB, alpha is dropped.
+// Loads PNG, JPEG, TIFF, EXR (anything OpenImageIO reads; PNG and JPEG without loading it).
+// 8/16-bit files are taken as sRGB and linearised; float files (EXR, float TIFF) as linear. Grey
+// becomes RGB, alpha is dropped.
 // Throws proctex::Error for a missing, truncated, corrupt, unsupported or oversized file.
 Image load_image(const std::filesystem::path& path, const ImageLimits& limits = {});
 

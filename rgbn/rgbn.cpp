@@ -1,8 +1,6 @@
 // RGBN type, files, normal maps, height fields.
 #include "rgbn/rgbn.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -10,6 +8,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "image/io.h"
 #include "metrics/fft.h"
 
 namespace proctex::rgbn {
@@ -55,72 +54,30 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
-std::string oiio_error() {
-  std::string e = OIIO::geterror();
-  std::replace(e.begin(), e.end(), '\n', ' ');
-  return e;
-}
-
-struct RawImage {
-  int width = 0, height = 0, channels = 0;
-  std::vector<std::string> names;
-  OIIO::TypeDesc format;
-  std::vector<float> data;  // integer formats scaled to [0, 1] by OIIO
-};
+using RawImage = ChannelImage;  // integer formats scaled to [0, 1]
 
 RawImage read_raw(const fs::path& path) {
   if (!fs::exists(path)) throw Error("cannot read " + quoted(path) + ": no such file", "check the path");
-  auto in = OIIO::ImageInput::open(path.string());
-  if (!in) throw Error("cannot read " + quoted(path) + ": " + oiio_error(), "give a PNG, TIFF or EXR file");
-  const OIIO::ImageSpec& spec = in->spec();
-  RawImage r;
-  r.width = spec.width, r.height = spec.height, r.channels = spec.nchannels;
-  r.names = spec.channelnames;
-  r.format = spec.format;
-  check_dimensions(r.width, r.height);
-  r.data.resize(size_t(r.width) * r.height * r.channels);
-  if (!in->read_image(0, 0, 0, r.channels, OIIO::TypeDesc::FLOAT, r.data.data())) {
-    const std::string e = in->geterror();
-    throw Error("cannot read " + quoted(path) + ": " + e, "the file is truncated or corrupt");
-  }
-  in->close();
-  return r;
+  return read_channels(path);
 }
 
-fs::path temporary_for(const fs::path& target) {
-  static std::atomic<unsigned> counter{0};
-  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(dir))
-    throw Error("cannot write " + quoted(target) + ": no directory " + quoted(dir), "create the directory first");
-  return dir / ("." + target.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +
-                std::to_string(counter++) + target.extension().string());
-}
-
-// Writes through a temporary and a rename.
-void write_atomic(const fs::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc data_format,
+// Writes through a temporary and a rename (image/io.h).
+void write_atomic(const fs::path& path, int w, int h, const WriteOptions& options, PixelType data_type,
                   const void* data) {
-  const fs::path temp = temporary_for(path);
-  std::string error;
-  {
-    auto out = OIIO::ImageOutput::create(temp.string());
-    if (!out) {
-      error = oiio_error();
-    } else if (!out->open(temp.string(), spec) || !out->write_image(data_format, data) || !out->close()) {
-      error = out->geterror();
-    }
-  }
-  std::error_code ec, ignored;
-  if (error.empty()) fs::rename(temp, path, ec);
-  if (!error.empty() || ec) {
-    fs::remove(temp, ignored);
-    throw Error("cannot write " + quoted(path) + ": " + (error.empty() ? ec.message() : error),
-                "check that the directory is writable and the disk is not full");
-  }
+  write_channels(path, w, h, options, data_type, data);
+}
+
+WriteOptions file_options(int channels, PixelType type, const std::string& compression = "") {
+  WriteOptions o;
+  o.channels = channels;
+  o.file_type = type;
+  o.compression = compression;
+  return o;
 }
 
 int find_channel(const RawImage& r, const std::string& name) {
   for (int c = 0; c < r.channels; ++c)
-    if (r.names.size() > size_t(c) && r.names[c] == name) return c;
+    if (r.channel_names.size() > size_t(c) && r.channel_names[c] == name) return c;
   return -1;
 }
 
@@ -162,17 +119,16 @@ void save_rgbn(const Rgbn& image, const fs::path& path) {
     throw Error("cannot save RGBN " + quoted(path) + ": the image is empty or inconsistent", "this is a bug");
   if (lower_ext(path) != ".exr")
     throw UsageError("an RGBN file must be an .exr: " + quoted(path), "use 'proctex rgbn export' for PNG/TIFF normal maps");
-  OIIO::ImageSpec spec(image.width, image.height, 6, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"R", "G", "B", "N.X", "N.Y", "N.Z"};
-  spec.attribute("compression", "zip");
-  spec.attribute("proctex:content", "rgbn");
+  WriteOptions spec = file_options(6, PixelType::Float, "zip");
+  spec.channel_names = {"R", "G", "B", "N.X", "N.Y", "N.Z"};
+  spec.attributes = {{"proctex:content", "rgbn"}};
   std::vector<float> data(image.size() * 6);
   for (size_t i = 0; i < image.size(); ++i)
     for (int c = 0; c < 3; ++c) {
       data[6 * i + c] = image.albedo[3 * i + c];
       data[6 * i + 3 + c] = image.normal[3 * i + c];
     }
-  write_atomic(path, spec, OIIO::TypeDesc::FLOAT, data.data());
+  write_atomic(path, image.width, image.height, spec, PixelType::Float, data.data());
 }
 
 Convention parse_convention(const std::string& name) {
@@ -191,11 +147,10 @@ void save_normal_map(const Rgbn& image, const fs::path& path, Convention convent
   const std::string ext = lower_ext(path);
   const float ysign = convention == Convention::DirectX ? -1.0f : 1.0f;
   if (ext == ".exr") {
-    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
-    spec.attribute("compression", "zip");
+    const WriteOptions spec = file_options(3, PixelType::Float, "zip");
     std::vector<float> data(image.normal);
     for (size_t i = 0; i < image.size(); ++i) data[3 * i + 1] *= ysign;
-    write_atomic(path, spec, OIIO::TypeDesc::FLOAT, data.data());
+    write_atomic(path, image.width, image.height, spec, PixelType::Float, data.data());
     return;
   }
   if (ext != ".png" && ext != ".tif" && ext != ".tiff")
@@ -205,17 +160,17 @@ void save_normal_map(const Rgbn& image, const fs::path& path, Convention convent
   const double top = bits == 8 ? 255.0 : 65535.0;
   auto encode = [&](float x) { return std::clamp(std::round((double(x) + 1.0) * scale), 0.0, top); };
   if (bits == 8) {
-    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
+    const WriteOptions spec = file_options(3, PixelType::UInt8);
     std::vector<uint8_t> data(image.size() * 3);
     for (size_t i = 0; i < image.size(); ++i)
       for (int c = 0; c < 3; ++c) data[3 * i + c] = uint8_t(encode(image.normal[3 * i + c] * (c == 1 ? ysign : 1.0f)));
-    write_atomic(path, spec, OIIO::TypeDesc::UINT8, data.data());
+    write_atomic(path, image.width, image.height, spec, PixelType::UInt8, data.data());
   } else {
-    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT16);
+    const WriteOptions spec = file_options(3, PixelType::UInt16);
     std::vector<uint16_t> data(image.size() * 3);
     for (size_t i = 0; i < image.size(); ++i)
       for (int c = 0; c < 3; ++c) data[3 * i + c] = uint16_t(encode(image.normal[3 * i + c] * (c == 1 ? ysign : 1.0f)));
-    write_atomic(path, spec, OIIO::TypeDesc::UINT16, data.data());
+    write_atomic(path, image.width, image.height, spec, PixelType::UInt16, data.data());
   }
 }
 
@@ -224,8 +179,7 @@ Rgbn load_normal_map(const fs::path& path, Convention convention, const Image* a
   if (r.channels < 3)
     throw Error("normal map " + quoted(path) + " has " + std::to_string(r.channels) + " channel(s), not 3",
                 "a normal map stores X, Y, Z in red, green, blue");
-  const bool is_float = r.format.basetype == OIIO::TypeDesc::FLOAT || r.format.basetype == OIIO::TypeDesc::HALF ||
-                        r.format.basetype == OIIO::TypeDesc::DOUBLE;
+  const bool is_float = r.file_type == PixelType::Float || r.file_type == PixelType::Half;
   const float ysign = convention == Convention::DirectX ? -1.0f : 1.0f;
   Rgbn out(r.width, r.height);
   for (size_t i = 0; i < out.size(); ++i) {
@@ -418,10 +372,9 @@ namespace proctex::rgbn::detail {
 void write_exr(const fs::path& path, int w, int h, const std::vector<std::string>& channels,
                const std::vector<float>& data) {
   if (lower_ext(path) != ".exr") throw UsageError("this file must be an .exr: " + quoted(path), "use the .exr extension");
-  OIIO::ImageSpec spec(w, h, int(channels.size()), OIIO::TypeDesc::FLOAT);
-  spec.channelnames = channels;
-  spec.attribute("compression", "zip");
-  write_atomic(path, spec, OIIO::TypeDesc::FLOAT, data.data());
+  WriteOptions spec = file_options(int(channels.size()), PixelType::Float, "zip");
+  spec.channel_names = channels;
+  write_atomic(path, w, h, spec, PixelType::Float, data.data());
 }
 
 std::vector<float> read_exr(const fs::path& path, const std::vector<std::string>& channels, int& w, int& h) {

@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers pocl-opencl-icd clinfo
-  libopenimageio-dev openimageio-tools
+  libopenimageio-dev openimageio-tools libpng-dev libjpeg-dev
   libfftw3-dev libnlopt-cxx-dev libnlopt-dev
   libsqlite3-dev sqlite3
   libcli11-dev nlohmann-json3-dev libfmt-dev libeigen3-dev

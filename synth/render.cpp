@@ -12,10 +12,10 @@
 #include <memory>
 #include <thread>
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "image/io.h"
 
 namespace proctex::synth {
 namespace fs = std::filesystem;
@@ -28,33 +28,33 @@ std::string ext_of(const fs::path& p) {
 }
 
 // The pixel type written for a file: PNG 8/16, JPEG 8, TIFF 8/16, EXR half (colour) or float (coords).
-OIIO::TypeDesc file_type(const fs::path& p, int bits) {
+PixelType file_type(const fs::path& p, int bits) {
   const std::string e = ext_of(p);
-  if (e == ".exr") return OIIO::TypeDesc::HALF;
-  if (e == ".jpg" || e == ".jpeg") return OIIO::TypeDesc::UINT8;
-  if (e == ".png") return bits == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8;
-  if (e == ".tif" || e == ".tiff") return bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
+  if (e == ".exr") return PixelType::Half;
+  if (e == ".jpg" || e == ".jpeg") return PixelType::UInt8;
+  if (e == ".png") return bits == 16 ? PixelType::UInt16 : PixelType::UInt8;
+  if (e == ".tif" || e == ".tiff") return bits == 8 ? PixelType::UInt8 : PixelType::UInt16;
   throw UsageError(fmt::format("cannot write '{}': unknown extension", p.string()), "use .png, .tif, .exr or .jpg");
 }
 
 // Every texel of the source encoded once in the file's pixel type: a strip is then a gather.
 struct Palette {
-  OIIO::TypeDesc type;
+  PixelType type;
   size_t texel_bytes = 0;
   std::vector<unsigned char> bytes;
 };
 
-Palette make_palette(const Image& src, OIIO::TypeDesc type) {
+Palette make_palette(const Image& src, PixelType type) {
   Palette p;
   const size_t n = static_cast<size_t>(src.width) * src.height;
-  if (type == OIIO::TypeDesc::HALF) {
-    p.type = OIIO::TypeDesc::FLOAT;  // OIIO converts float to half when writing
+  if (type == PixelType::Half) {
+    p.type = PixelType::Float;  // the writer converts float to half
     p.texel_bytes = 3 * sizeof(float);
     p.bytes.resize(n * p.texel_bytes);
     std::memcpy(p.bytes.data(), src.pixels.data(), p.bytes.size());
     return p;
   }
-  const bool wide = type == OIIO::TypeDesc::UINT16;
+  const bool wide = type == PixelType::UInt16;
   p.type = type;
   p.texel_bytes = 3 * (wide ? 2 : 1);
   p.bytes.resize(n * p.texel_bytes);
@@ -71,66 +71,23 @@ Palette make_palette(const Image& src, OIIO::TypeDesc type) {
   return p;
 }
 
-fs::path temporary_beside(const fs::path& target) {
-  static std::atomic<unsigned> counter{0};
-  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  for (int attempt = 0;; ++attempt) {
-    const fs::path temp = dir / ("." + target.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                                 std::to_string(counter++) + target.extension().string());
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd >= 0) {
-      ::close(fd);
-      return temp;
-    }
-    if (errno != EEXIST || attempt > 100) {
-      throw Error(fmt::format("cannot write '{}': {}", target.string(), std::strerror(errno)),
-                  "check that the folder is writable and the disk is not full");
-    }
-  }
-}
-
-// One output file written strip by strip into a temporary; commit() renames it into place, the
-// destructor removes an uncommitted temporary.
+// One output file written strip by strip into a temporary (image/io.h); commit() renames it into
+// place, the destructor removes an uncommitted temporary.
 class StripFile {
  public:
-  StripFile(fs::path target, int width, int height, OIIO::TypeDesc file_format, bool linear)
-      : target_(std::move(target)), temp_(temporary_beside(target_)) {
-    out_ = OIIO::ImageOutput::create(temp_.string());
-    OIIO::ImageSpec spec(width, height, 3, file_format);
-    spec.attribute("oiio:ColorSpace", linear ? "Linear" : "sRGB");
-    if (ext_of(target_) == ".png") spec.attribute("png:compressionLevel", 1);
-    if (!out_ || !out_->open(temp_.string(), spec)) fail();
+  StripFile(fs::path target, int width, int height, PixelType file_format, bool linear) {
+    WriteOptions options;
+    options.file_type = file_format;
+    options.colour_space = linear ? "Linear" : "sRGB";
+    if (ext_of(target) == ".png") options.png_compression_level = 1;
+    writer_ = std::make_unique<StripWriter>(target, width, height, options);
   }
-  ~StripFile() {
-    if (!committed_) {
-      if (out_) out_->close();
-      std::error_code ec;
-      fs::remove(temp_, ec);
-    }
-  }
-  void write(int y0, int rows, OIIO::TypeDesc type, const void* data) {
-    if (!out_->write_scanlines(y0, y0 + rows, 0, type, data)) fail();
-  }
-  void close() {
-    if (!out_->close()) fail();
-  }
-  void commit() {
-    std::error_code ec;
-    fs::rename(temp_, target_, ec);
-    if (ec) throw Error(fmt::format("cannot write '{}': {}", target_.string(), ec.message()), "check the folder");
-    committed_ = true;
-  }
+  void write(int y0, int rows, PixelType type, const void* data) { writer_->write_rows(y0, rows, type, data); }
+  void close() { writer_->close(); }
+  void commit() { writer_->finish(); }
 
  private:
-  [[noreturn]] void fail() {
-    std::string msg = out_ ? out_->geterror() : OIIO::geterror();
-    if (msg.empty()) msg = "the image writer failed";
-    throw Error(fmt::format("cannot write '{}': {}", target_.string(), msg),
-                "check that the folder is writable and the disk is not full");
-  }
-  fs::path target_, temp_;
-  std::unique_ptr<OIIO::ImageOutput> out_;
-  bool committed_ = false;
+  std::unique_ptr<StripWriter> writer_;
 };
 
 void check_folder(const fs::path& p) {
@@ -186,7 +143,7 @@ struct SeamBlend {
 void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std::vector<int32_t>& P, int pw, int w,
                  int rows, std::vector<unsigned char>& out) {
   const size_t tb = pal.texel_bytes;
-  const bool wide = pal.type == OIIO::TypeDesc::UINT16, flt = pal.type == OIIO::TypeDesc::FLOAT;
+  const bool wide = pal.type == PixelType::UInt16, flt = pal.type == PixelType::Float;
   const double levels = wide ? 65535.0 : 255.0;
   auto value = [&](int32_t texel, int c) -> double {  // the texel's channel in the palette's encoding
     const unsigned char* b = &pal.bytes[static_cast<size_t>(texel) * tb];
@@ -344,18 +301,18 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
   };
   std::vector<Target> targets;
   auto add = [&](const fs::path& path, const Image& src, bool normal) {
-    const OIIO::TypeDesc t = file_type(path, o.bits);
+    const PixelType t = file_type(path, o.bits);
     Target tg;
     tg.palette = make_palette(src, t);
     tg.normal = normal;
-    tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == OIIO::TypeDesc::HALF);
+    tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == PixelType::Half);
     targets.push_back(std::move(tg));
   };
   add(o.colour, ex.colour, false);
   for (size_t i = 0; i < o.maps.size(); ++i) add(o.maps[i], ex.maps[i].image, ex.maps[i].kind == MapKind::Normal);
   std::unique_ptr<StripFile> coords;
   if (!o.coords.empty())
-    coords = std::make_unique<StripFile>(o.coords, win.width, win.height, OIIO::TypeDesc::FLOAT, true);
+    coords = std::make_unique<StripFile>(o.coords, win.width, win.height, PixelType::Float, true);
 
   RenderStats stats;
   const int rows_per_strip =
@@ -400,7 +357,7 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
         coord_rows[3 * i + 1] = static_cast<float>(S[2 * i + 1]);
         coord_rows[3 * i + 2] = 0.0f;
       }
-      coords->write(y0, rows, OIIO::TypeDesc::FLOAT, coord_rows.data());
+      coords->write(y0, rows, PixelType::Float, coord_rows.data());
     }
     ++stats.strips;
     if (progress) progress(double(y0 + rows) / win.height);
@@ -418,11 +375,11 @@ RenderStats write_strips(const std::vector<StripTarget>& files, int width, int h
                          const std::function<void(double)>& progress) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::unique_ptr<StripFile>> out;
-  std::vector<OIIO::TypeDesc> types;
+  std::vector<PixelType> types;
   for (const auto& f : files) {
-    const OIIO::TypeDesc t = f.raw ? OIIO::TypeDesc::FLOAT : file_type(f.path, bits);
+    const PixelType t = f.raw ? PixelType::Float : file_type(f.path, bits);
     types.push_back(t);
-    out.push_back(std::make_unique<StripFile>(f.path, width, height, t, f.raw || t == OIIO::TypeDesc::HALF));
+    out.push_back(std::make_unique<StripFile>(f.path, width, height, t, f.raw || t == PixelType::Half));
   }
   RenderStats stats;
   rows_per_strip = std::clamp(rows_per_strip, 1, height);
@@ -437,21 +394,21 @@ RenderStats write_strips(const std::vector<StripTarget>& files, int width, int h
     for (size_t k = 0; k < files.size(); ++k) {
       auto& d = data[k];
       if (files[k].raw) {
-        out[k]->write(y0, rows, OIIO::TypeDesc::FLOAT, d.data());
-      } else if (types[k] == OIIO::TypeDesc::HALF) {
+        out[k]->write(y0, rows, PixelType::Float, d.data());
+      } else if (types[k] == PixelType::Half) {
         for (float& v : d) v = srgb_to_linear(std::clamp(v, 0.0f, 1.0f));
-        out[k]->write(y0, rows, OIIO::TypeDesc::FLOAT, d.data());
-      } else if (types[k] == OIIO::TypeDesc::UINT16) {
+        out[k]->write(y0, rows, PixelType::Float, d.data());
+      } else if (types[k] == PixelType::UInt16) {
         bytes.resize(n * 2);
         for (size_t i = 0; i < n; ++i) {
           const uint16_t v = static_cast<uint16_t>(std::lround(std::clamp(d[i], 0.0f, 1.0f) * 65535.0f));
           std::memcpy(&bytes[i * 2], &v, 2);
         }
-        out[k]->write(y0, rows, OIIO::TypeDesc::UINT16, bytes.data());
+        out[k]->write(y0, rows, PixelType::UInt16, bytes.data());
       } else {
         bytes.resize(n);
         for (size_t i = 0; i < n; ++i) bytes[i] = static_cast<unsigned char>(std::lround(std::clamp(d[i], 0.0f, 1.0f) * 255.0f));
-        out[k]->write(y0, rows, OIIO::TypeDesc::UINT8, bytes.data());
+        out[k]->write(y0, rows, PixelType::UInt8, bytes.data());
       }
     }
     ++stats.strips;

@@ -1,6 +1,5 @@
 #include "transform/frames.h"
 
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <atomic>
@@ -9,6 +8,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "image/io.h"
 
 namespace proctex::transform {
 
@@ -214,33 +214,16 @@ Quality measure(std::vector<Frame>& frames, Renderer& renderer, int resolution, 
 void write_gif(const std::vector<Image>& frames, const std::filesystem::path& path, int fps) {
   if (frames.empty()) throw Error("no frames to write to '" + path.string() + "'");
   const int w = frames.front().width, h = frames.front().height;
-  const auto tmp = path.string() + ".tmp.gif";
-  auto out = OIIO::ImageOutput::create(path.string());
-  if (!out) throw Error("cannot write GIF '" + path.string() + "': " + OIIO::geterror(), "check the extension (.gif)");
-  if (!out->supports("multiimage") || !out->supports("appendsubimage"))
-    throw Error("this OpenImageIO cannot write animated GIFs", "use the PNG frames with another tool");
-  std::vector<OIIO::ImageSpec> specs;
-  for (size_t i = 0; i < frames.size(); ++i) {
-    OIIO::ImageSpec s(w, h, 3, OIIO::TypeDesc::UINT8);
-    s.attribute("FramesPerSecond", OIIO::TypeRational, std::vector<int>{fps, 1}.data());
-    s.attribute("gif:LoopCount", 0);  // loop forever
-    specs.push_back(s);
-  }
-  if (!out->open(tmp, static_cast<int>(specs.size()), specs.data()))
-    throw Error("cannot write GIF '" + path.string() + "': " + out->geterror(), "check that the folder is writable");
-  std::vector<unsigned char> bytes(size_t(w) * h * 3);
-  for (size_t f = 0; f < frames.size(); ++f) {
-    if (f > 0 && !out->open(tmp, specs[f], OIIO::ImageOutput::AppendSubimage))
-      throw Error("cannot append GIF frame: " + out->geterror());
-    const Image img = frames[f].width == w && frames[f].height == h ? frames[f] : resize(frames[f], w, h);
+  std::vector<std::vector<uint8_t>> codes;
+  codes.reserve(frames.size());
+  for (const Image& frame : frames) {
+    const Image img = frame.width == w && frame.height == h ? frame : resize(frame, w, h);
+    std::vector<uint8_t> bytes(size_t(w) * h * 3);
     for (size_t i = 0; i < bytes.size(); ++i)
       bytes[i] = static_cast<unsigned char>(std::lround(255 * linear_to_srgb(std::clamp(img.pixels[i], 0.0f, 1.0f))));
-    if (!out->write_image(OIIO::TypeDesc::UINT8, bytes.data())) throw Error("cannot write GIF frame: " + out->geterror());
+    codes.push_back(std::move(bytes));
   }
-  if (!out->close()) throw Error("cannot write GIF '" + path.string() + "': " + out->geterror());
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error("cannot write GIF '" + path.string() + "': " + ec.message());
+  write_animated_gif(path, codes, w, h, fps);
 }
 
 }  // namespace proctex::transform

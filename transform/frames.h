@@ -78,7 +78,7 @@ Quality measure(std::vector<Frame>& frames, Renderer& renderer, int resolution, 
                 std::vector<Image>* keep = nullptr, int keep_size = 128,
                 const std::function<void(double)>& progress = {});
 
-// Animated GIF (OpenImageIO's GIF writer, one subimage per frame, looping).
+// Animated GIF (image/io.h: OpenImageIO's GIF writer, one subimage per frame, looping).
 void write_gif(const std::vector<Image>& frames, const std::filesystem::path& path, int fps);
 
 }  // namespace proctex::transform
