@@ -57,7 +57,7 @@ struct SynthOptions {
   // self-similar translations (Analysis::shifts; drawn by the same position hash) instead of by a
   // uniform random shift of up to +-r h_l, so adjacent blocks differ by a shift that keeps the
   // structure (brick rows stay aligned). 0 = uniform shifts. The randomness value of that level
-  // still switches it on (r > 0) or off (r = 0) and the jitter map still applies. 32: brick's
+  // only switches it on (r > 0) or off (r = 0); a jitter map turns it off where it is 0. 32: brick's
   // coherence 5.5 -> 4.0 and median completeness 6.8 -> 2.3 on the bench (8: more verbatim copying).
   int layout_shifts = 32;
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
