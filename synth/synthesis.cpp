@@ -487,8 +487,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     cl::Buffer paste_buffer = ocl::upload(paste_data);
     // Structure-keeping shifts at the first synthesised level only.
     const int shift_count = l == l0 ? std::min<int>(o.layout_shifts, static_cast<int>(a.shifts.size() / 2)) : 0;
-    std::vector<cl_int> shift_data(a.shifts.begin(), a.shifts.begin() + 2 * shift_count);
-    if (shift_data.empty()) shift_data = {0, 0};
+    std::vector<cl_int> shift_data(static_cast<size_t>(std::max(2, 2 * shift_count)), 0);  // never empty
+    std::copy_n(a.shifts.begin(), 2 * shift_count, shift_data.begin());
     cl::Buffer shift_buffer = ocl::upload(shift_data);
     launch2d(dev.upsample, r.w, r.h, parent, static_cast<cl_int>(parent_region.w),
                 static_cast<cl_long>(parent_region.x), static_cast<cl_long>(parent_region.y),
