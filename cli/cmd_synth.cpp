@@ -31,6 +31,8 @@ struct SynthCliOptions {
   float kappa = 8.0f;
   int finest_passes = 2;
   int refine_passes = 1;
+  int rematch_passes = synth::SynthOptions{}.rematch_passes;
+  int layout_shifts = synth::SynthOptions{}.layout_shifts;
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
@@ -237,6 +239,8 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.passes = parse_passes(o.passes);
   options.finest_passes = o.finest_passes;
   options.refine_passes = o.refine_passes;
+  options.rematch_passes = o.rematch_passes;
+  options.layout_shifts = o.layout_shifts;
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -352,6 +356,8 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"passes", options.passes},
                 {"finest_passes", options.finest_passes},
                 {"refine_seams", options.refine_passes},
+                {"rematch", options.rematch_passes},
+                {"layout_shifts", options.layout_shifts},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
@@ -418,6 +424,14 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
                   "Seam refinement passes at the finest level (0..8): pixels on a join between patches take "
                   "the neighbouring patch whose 9x9 surroundings match best")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--rematch", o->rematch_passes,
+                  "Final re-match passes at the finest level (0..8): pixels on a join take, among their "
+                  "neighbours' patches and k-coherence candidates, the one whose 7x7 texels match best")
+      ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--layout-shifts", o->layout_shifts,
+                  "Shift the first level's blocks only by the exemplar's K most self-similar translations "
+                  "(keeps rows and lattices aligned; 0 = any random shift)")
+      ->capture_default_str()->check(CLI::Range(0, synth::kMaxShifts));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));

@@ -1,6 +1,7 @@
 #include "synth/analysis.h"
 #include "synth/plane.h"
 #include "synth/cache_io.h"
+#include "metrics/fft.h"
 
 #include <algorithm>
 #include <atomic>
@@ -364,6 +365,62 @@ void save_cache(const std::filesystem::path& file, const Analysis& a) {
   if (ec) std::filesystem::remove(tmp, ec);
 }
 
+// The most self-similar translations (Analysis::shifts): the autocorrelation of the mean-free
+// channels by FFT (Wiener-Khinchin), its local maxima away from 0, best first.
+std::vector<int32_t> self_similar_shifts(const Channels& ch) {
+  namespace fd = metrics::detail;
+  const int w = ch.width, h = ch.height, hw = w / 2 + 1;
+  const size_t n = static_cast<size_t>(w) * h;
+  std::vector<double> acf(n, 0.0);
+  fd::FftwArray<float> in(n), back(n);
+  fd::FftwArray<fd::Complex> spec(static_cast<size_t>(h) * hw);
+  for (int c = 0; c < ch.count; ++c) {
+    const float* plane = ch.data.data() + c * n;
+    double mean = 0;
+    for (size_t i = 0; i < n; ++i) mean += plane[i];
+    mean /= n;
+    for (size_t i = 0; i < n; ++i) in[i] = static_cast<float>(plane[i] - mean);
+    fd::fft_r2c(h, w, in, spec);
+    for (size_t i = 0; i < spec.size(); ++i) spec[i] = fd::Complex(std::norm(spec[i]), 0.0f);
+    fd::fft_c2r(h, w, spec, back);
+    for (size_t i = 0; i < n; ++i) acf[i] += back[i];
+  }
+  std::vector<std::pair<double, int>> peaks;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int dx = x <= w / 2 ? x : x - w, dy = y <= h / 2 ? y : y - h;
+      if (8 * std::abs(dx) < w && 8 * std::abs(dy) < h) continue;  // too close to no shift at all
+      const double v = acf[static_cast<size_t>(y) * w + x];
+      bool peak = true;
+      for (int ey = -1; ey <= 1 && peak; ++ey)
+        for (int ex = -1; ex <= 1; ++ex) {
+          if ((ex || ey) && acf[static_cast<size_t>(detail::wrap(y + ey, h)) * w + detail::wrap(x + ex, w)] > v) {
+            peak = false;
+            break;
+          }
+        }
+      if (peak) peaks.emplace_back(-v, y * w + x);  // ties: the lower index first (deterministic)
+    }
+  std::sort(peaks.begin(), peaks.end());
+  std::vector<int32_t> out;
+  for (size_t k = 0; k < peaks.size() && out.size() < 2 * static_cast<size_t>(kMaxShifts); ++k) {
+    const int x = peaks[k].second % w, y = peaks[k].second / w;
+    out.push_back(x <= w / 2 ? x : x - w);
+    out.push_back(y <= h / 2 ? y : y - h);
+  }
+  return out;
+}
+
+void fill_texels(const Channels& ch, Analysis& a) {
+  a.shifts = self_similar_shifts(ch);
+  const size_t n = static_cast<size_t>(ch.width) * ch.height;
+  a.texel_channels = ch.count;
+  a.texels.resize(n * ch.count);
+  for (int c = 0; c < ch.count; ++c)
+    for (size_t i = 0; i < n; ++i)
+      a.texels[i * ch.count + c] = static_cast<int16_t>(std::lround(std::clamp(ch.data[c * n + i], -64.0f, 64.0f) * 255.0f));
+}
+
 bool resolve_toroidal(const Exemplar& ex, const AnalysisOptions& o) {
   if (o.tiling == Tiling::Toroidal) return true;
   if (o.tiling == Tiling::Bounded) return false;
@@ -429,6 +486,7 @@ Analysis analyse(const Exemplar& ex, const AnalysisOptions& options) {
   a.levels = level_count(ch.width, ch.height);
   a.toroidal = resolve_toroidal(ex, options);
   a.hash = content_hash(ex, ch, a.toroidal);
+  fill_texels(ch, a);
   const Sampler s{ch.width, ch.height, a.toroidal};
   const auto stack = gaussian_stack(ch, a.levels, s);
   a.level.resize(a.levels + 1);
@@ -462,6 +520,7 @@ Analysis analyse_cached(const Exemplar& ex, const AnalysisOptions& options, cons
   a.hash = content_hash(ex, ch, a.toroidal);
   const auto file = cache_dir / (a.hash + ".bin");
   if (load_cache(file, a)) {
+    fill_texels(ch, a);
     a.from_cache = true;
     return a;
   }

@@ -25,6 +25,7 @@ inline constexpr int kNeighbourTaps = 9;  // the 3x3 taps at spacing h_l
 inline constexpr int kNeighbourDims = kAppearanceDims * kNeighbourTaps;
 inline constexpr int kProjectionShift = 8;  // fixed-point bits of the integer projection
 inline constexpr int kAnalysisVersion = 5;
+inline constexpr int kMaxShifts = 64;
 
 enum class Tiling { Auto, Toroidal, Bounded };
 
@@ -46,6 +47,16 @@ struct Analysis {
   bool toroidal = false;
   std::string hash;  // content hash (exemplar pixels, maps, weights, options, version)
   std::vector<AnalysisLevel> level;
+  // The matching channels at the finest level, quantised (round(255 v); colour sRGB-encoded, maps
+  // weighted as in Channels), interleaved: texel i's channel c at texels[i * texel_channels + c].
+  // Not cached: derived from the pixels on every load (the final re-match scores on them).
+  std::vector<int16_t> texels;
+  int texel_channels = 0;
+  // Structure-keeping shifts for the layout jitter: the translations t under which the exemplar
+  // is most similar to itself (local maxima of its circular autocorrelation over every channel,
+  // |t_x| >= w/8 or |t_y| >= h/8 so that a shift changes the content), best first, at most
+  // kMaxShifts, as (dx, dy) pairs. Derived from the pixels on every load, like texels.
+  std::vector<int32_t> shifts;
   double seconds = 0;    // analysis time (0 when loaded from the cache)
   bool from_cache = false;
 };

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include <fmt/format.h>
 
@@ -37,7 +38,7 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
                      global int2* S, int w, int h, long ox, long oy,
                      int spacing, int ew, int eh, long period_x, long period_y,
                      int rq, uint seed, uint level, global const uchar* jmap, int jw, int jh, int shift,
-                     global const long* pastes, int paste_count) {
+                     global const long* pastes, int paste_count, global const int* shifts, int shift_count) {
   const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const long qx = ox + i, qy = oy + j;
@@ -50,7 +51,12 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
   long jx = 0, jy = 0;
   // The jitter map scales r at the finest-level pixel this one covers; it repeats over the plane.
   const int scaled = (int)(((long)rq * jmap[sy_wrapl(qy << shift, jh) * jw + sy_wrapl(qx << shift, jw)]) / 255);
-  if (scaled > 0) {
+  if (scaled > 0 && shift_count > 0) {
+    // One of the exemplar's most self-similar translations (structure-keeping layout jitter).
+    const uint k = sy_hash_pos(hx, hy, level, seed, 2) % (uint)shift_count;
+    jx = shifts[2 * k];
+    jy = shifts[2 * k + 1];
+  } else if (scaled > 0) {
     const int Hx = (int)(sy_hash_pos(hx, hy, level, seed, 0) % 131073U) - 65536;
     const int Hy = (int)(sy_hash_pos(hx, hy, level, seed, 1) % 131073U) - 65536;
     jx = ((long)spacing * scaled * Hx + (1L << 31)) >> 32;
@@ -211,6 +217,94 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
   }
   S[(long)j * w + i] = best;
 }
+// Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
+// ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
+// of the 3x3 (C1[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
+// around p (48 taps, the centre excluded; the first 8 channels, quantised). Sub-passes are the 4x4
+// classes of the absolute coordinates (a pixel reads 3 px around); a tileable plane updates every
+// pixel at once from a copy (parx < 0), as sy_refine.
+#define SY_RM_CH 8
+int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
+kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+                       global const short* T, int C, global const int* C1, int ew, int eh, int toroidal) {
+  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 4) + 4 * get_global_id(0);
+  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 4) + 4 * get_global_id(1);
+  if (i >= w || j >= h) return;
+  const int2 s0 = Sin[(long)j * w + i];
+  // Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep.
+  int inside = 1;
+  for (int e = 0; e < 9 && inside; ++e) {
+    const int ni = clamp(i + e % 3 - 1, 0, w - 1), nj = clamp(j + e / 3 - 1, 0, h - 1);
+    const int2 c = Sin[(long)nj * w + ni];
+    int ux = c.x - (ni - i), uy = c.y - (nj - j);
+    if (toroidal) { ux = sy_step(ux, ew); uy = sy_step(uy, eh); }
+    inside = ux == s0.x && uy == s0.y;
+  }
+  if (inside) return;
+  int2 cand[18];
+  int n = 0;
+  cand[n++] = s0;
+  for (int e = 0; e < 9; ++e) {
+    const int ex = e % 3 - 1, ey = e / 3 - 1;
+    const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1);
+    const int2 c = Sin[(long)nj * w + ni];
+    for (int kk = 0; kk < 2; ++kk) {
+      if (kk == 0 && ex == 0 && ey == 0) continue;
+      int ux = c.x, uy = c.y;
+      if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
+      ux -= ni - i;
+      uy -= nj - j;
+      if (toroidal) {
+        ux = sy_step(ux, ew);
+        uy = sy_step(uy, eh);
+      } else if (ux < 3 || uy < 3 || ux >= ew - 3 || uy >= eh - 3) {
+        continue;  // its 7x7 would leave a bounded exemplar
+      }
+      int dup = 0;
+      for (int k = 0; k < n; ++k) dup |= (cand[k].x == ux && cand[k].y == uy);
+      if (!dup) cand[n++] = (int2)(ux, uy);
+    }
+  }
+  if (n == 1) return;
+  // The texels the synthesis has around p.
+  const int ch = min(C, SY_RM_CH);
+  short ref[48 * SY_RM_CH];
+  int t = 0;
+  for (int dy = -3; dy <= 3; ++dy) {
+    const int nj = clamp(j + dy, 0, h - 1);
+    for (int dx = -3; dx <= 3; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)];
+      global const short* src = T + ((long)q.y * ew + q.x) * C;
+      for (int c = 0; c < ch; ++c) ref[t * SY_RM_CH + c] = src[c];
+      ++t;
+    }
+  }
+  int2 best = s0;
+  int bestd = 0x7fffffff;
+  for (int k = 0; k < n; ++k) {
+    const int cx = cand[k].x, cy = cand[k].y;
+    // Away from a bounded exemplar's border (every candidate but possibly s0) no mirroring is needed.
+    const int plain = toroidal || (cx >= 3 && cy >= 3 && cx < ew - 3 && cy < eh - 3);
+    int d = 0;
+    t = 0;
+    for (int dy = -3; dy <= 3 && d < bestd; ++dy) {
+      const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh);
+      for (int dx = -3; dx <= 3; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew);
+        global const short* src = T + ((long)uy * ew + ux) * C;
+        for (int c = 0; c < ch; ++c) {
+          const int e = (int)ref[t * SY_RM_CH + c] - (int)src[c];
+          d += e * e;
+        }
+        ++t;
+      }
+    }
+    if (d < bestd) { bestd = d; best = cand[k]; }
+  }
+  S[(long)j * w + i] = best;
+}
 )CL";
 
 struct Region {
@@ -235,7 +329,9 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 struct Synthesizer::Device {
   cl::Program program;
-  cl::Kernel upsample, correct, refine;
+  cl::Kernel upsample, correct, refine, rematch;
+  cl::Buffer texels;
+  int texel_channels = 0;
   struct Level {
     cl::Buffer appearance, neighbourhood, coherent, projection;
   };
@@ -275,6 +371,9 @@ void check_options(const Analysis& a, const SynthOptions& o) {
     if (p < 0 || p > 8) throw UsageError("--passes must be in [0, 8]");
   if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
   if (o.refine_passes < 0 || o.refine_passes > 8) throw UsageError("--refine-seams must be in [0, 8]");
+  if (o.rematch_passes < 0 || o.rematch_passes > 8) throw UsageError("--rematch must be in [0, 8]");
+  if (o.layout_shifts < 0 || o.layout_shifts > kMaxShifts)
+    throw UsageError(fmt::format("--layout-shifts must be in [0, {}]", kMaxShifts), "0 = uniform random shifts");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
     throw UsageError("the tiling period must be in [2, 16777216]");
   if ((o.period_x > 0) != (o.period_y > 0)) throw UsageError("give a period along both axes or neither");
@@ -304,8 +403,13 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
     device_->refine = cl::Kernel(device_->program, "sy_refine");
+    device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     return 0;
   });
+  if (!analysis.texels.empty()) {
+    device_->texels = ocl::upload(analysis.texels);
+    device_->texel_channels = analysis.texel_channels;
+  }
   for (const auto& lv : analysis.level) {
     Device::Level d;
     d.appearance = ocl::upload(lv.appearance);
@@ -328,8 +432,12 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   const int L = a.levels;
   const int l0 = first_level(a, o);
   // The reach of level l's correction: each sub-pass reads one pixel around, 4 per pass.
-  // At the finest level the seam refinement's 9 sub-passes read 2 pixels around each.
-  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2 + (l == L ? 18 * o.refine_passes : 0); };
+  // At the finest level the seam refinement's 9 sub-passes read 2 pixels around each, the re-match's
+  // 16 sub-passes 3 pixels.
+  const int rematch = a.texels.empty() ? 0 : o.rematch_passes;
+  auto pad_at = [&](int l) {
+    return 4 * passes_at(a, o, l) + 2 + (l == L ? 18 * o.refine_passes + 48 * rematch : 0);
+  };
   const int pad = pad_at(L);
   // Regions, finest first: E_L = window + pad_L; E_{l-1} = parents(E_l) + pad_{l-1}.
   std::vector<Region> region(L + 1);
@@ -377,6 +485,11 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                                            p.ex_y - p.out_y + c_gap});
     }
     cl::Buffer paste_buffer = ocl::upload(paste_data);
+    // Structure-keeping shifts at the first synthesised level only.
+    const int shift_count = l == l0 ? std::min<int>(o.layout_shifts, static_cast<int>(a.shifts.size() / 2)) : 0;
+    std::vector<cl_int> shift_data(static_cast<size_t>(std::max(2, 2 * shift_count)), 0);  // never empty
+    std::copy_n(a.shifts.begin(), 2 * shift_count, shift_data.begin());
+    cl::Buffer shift_buffer = ocl::upload(shift_data);
     launch2d(dev.upsample, r.w, r.h, parent, static_cast<cl_int>(parent_region.w),
                 static_cast<cl_long>(parent_region.x), static_cast<cl_long>(parent_region.y),
                 static_cast<cl_int>(parent_zero ? 1 : 0), S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
@@ -384,7 +497,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
                 static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
-                static_cast<cl_int>(o.pastes.size()));
+                static_cast<cl_int>(o.pastes.size()), shift_buffer, static_cast<cl_int>(shift_count));
     const auto& lv = dev.levels[l];
     for (int pass = 0; pass < passes_at(a, o, l); ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
@@ -420,6 +533,31 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           launch2d(dev.refine, (r.w + 2) / 3, (r.h + 2) / 3, S, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
                    static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub % 3),
                    static_cast<cl_int>(sub / 3), lv.appearance, static_cast<cl_int>(a.width),
+                   static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
+        }
+      }
+    }
+    if (l == L && rematch > 0) {
+      const bool periodic = o.period_x > 0;
+      cl::Buffer previous;
+      if (periodic) {
+        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
+          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
+        });
+      }
+      for (int pass = 0; pass < rematch; ++pass) {
+        const int subs = periodic ? 1 : 16;
+        for (int sub = 0; sub < subs; ++sub) {
+          if (periodic) {
+            ocl::with_cl_errors("copying a synthesis level", [&] {
+              return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
+            });
+          }
+          const int gx = periodic ? r.w : (r.w + 3) / 4, gy = periodic ? r.h : (r.h + 3) / 4;
+          launch2d(dev.rematch, gx, gy, periodic ? previous : S, S, static_cast<cl_int>(r.w),
+                   static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
+                   static_cast<cl_int>(periodic ? -1 : sub % 4), static_cast<cl_int>(periodic ? -1 : sub / 4),
+                   dev.texels, static_cast<cl_int>(dev.texel_channels), lv.coherent, static_cast<cl_int>(a.width),
                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
         }
       }

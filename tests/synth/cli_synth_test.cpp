@@ -73,6 +73,9 @@ TEST(SynthCli, WritesTheOutputAndReportsJson) {
   EXPECT_EQ(out.height, 120);
   EXPECT_NE(r.out.find("\"seed\": 9"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"analysis_cached\": false"), std::string::npos) << r.out;
+  // The options that shape the result are recorded (the defaults of issue 13's third pass).
+  EXPECT_NE(r.out.find("\"layout_shifts\": 32"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"rematch\": 1"), std::string::npos) << r.out;
   // The second run finds the analysis in the cache.
   const auto again = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "out2.png").string() +
                                      "' --size 200x120 --seed 9 --json",
@@ -305,6 +308,8 @@ TEST(SynthCli, BadInputIsOneLineAndLeavesNoFile) {
       {"synth '" + ex.string() + "'" + o + " --randomness 9", "outside", 2},
       {"synth '" + ex.string() + "'" + o + " --randomness 1,1,1,1,1,1,1,1,1,1", "levels", 2},
       {"synth '" + ex.string() + "'" + o + " --tileable --size 127", "even", 2},
+      {"synth '" + ex.string() + "'" + o + " --rematch 9", "--rematch", 2},
+      {"synth '" + ex.string() + "'" + o + " --layout-shifts 65", "--layout-shifts", 2},
       {"synth '" + ex.string() + "'" + o + " --coords '" + (dir / "uv.png").string() + "'", ".exr", 2},
       {"synth '" + ex.string() + "' -o '" + (dir / "nodir" / "out.png").string() + "'", "does not exist", 1},
       {"synth '" + ex.string() + "' -o '" + (dir / "out.bmpx").string() + "'", "unknown extension", 2},
