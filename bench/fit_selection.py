@@ -20,7 +20,7 @@ CIELAB mean, deviation and quantiles of L*, a*, b*, chroma, and the hue directio
 writes them to colour.f32), added to every shader's logit of a photo. Its weights are fitted on the
 photo rows only (catalogue samples have random colours), jointly with the structural weights, with
 their own L2 penalty (--colour-l2); the colour statistics are standardised with the tune photos'
-mean and deviation.
+mean and deviation. A greyscale photo (mean chroma < 0.5) gets no colour term (search/selection.h).
 At match time a photo's score for a shader is the largest logit over its views plus
 alpha * log(best structural similarity of the shader's catalogue samples to the photo) - the
 catalogue's nearest-sample evidence, which recognises clean renders the classifier has not seen;
@@ -52,6 +52,8 @@ import numpy as np
 # Feature layout of the default metric (composite v106): spectrum 30, pyramid 160, colour 36,
 # structure 191. Colour [190, 226) is left out.
 STRUCTURAL = [(0, 190), (226, 417)]
+# search::kGreyscaleChroma: below this mean chroma a photo is greyscale and its colour term is left out.
+GREYSCALE_CHROMA = 0.5
 
 
 def softmax(L):
@@ -118,6 +120,9 @@ class Data:
         self.cmean = self.C[tune].mean(axis=0) if C else np.zeros(0)
         self.cscale = (self.C[tune].std(axis=0) + 1e-6) if C else np.zeros(0)
         self.CZ = np.nan_to_num((self.C - self.cmean) / np.where(self.cscale > 0, self.cscale, 1), nan=0.0)
+        # Greyscale photos (mean chroma [6] below search::kGreyscaleChroma = 0.5) get no colour term.
+        if C:
+            self.CZ[np.nan_to_num(self.C[:, 6], nan=0.0) < GREYSCALE_CHROMA] = 0.0
         self.colour = False
         self.colour_l2 = 0.05
         self.precondition = True

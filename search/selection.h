@@ -42,6 +42,10 @@ double structural_similarity(const metrics::Metric& metric, const metrics::Featu
 // and the chroma-weighted mean hue direction (cos, sin): kColourStatistics values, in that order.
 inline constexpr std::size_t kColourStatistics = 22;
 std::vector<double> colour_statistics(const Image& photo);
+// A photo whose mean chroma is below this (CIELAB units) is taken as a greyscale photo (R = G = B
+// gives exactly 0; the least colourful colour photo of the labelled set has 0.54): its colours
+// say nothing about the material, so the colour term is left out for it.
+inline constexpr double kGreyscaleChroma = 0.5;
 
 // The selection model's version (recorded in match results).
 int selection_version();
