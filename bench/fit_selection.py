@@ -14,6 +14,13 @@ the library's shaders, trained on
   - with `bench_select_dump --augment N`, N photo-like renders of every sample (zoom, lighting
     gradient, blur, noise), labelled with its shader,
 with an L2 penalty (--l2). Features are standardised with the catalogue's mean and deviation.
+
+Colour (--colour): a second, linear term over the photo's colour statistics (search::colour_statistics:
+CIELAB mean, deviation and quantiles of L*, a*, b*, chroma, and the hue direction; bench_select_dump
+writes them to colour.f32), added to every shader's logit of a photo. Its weights are fitted on the
+photo rows only (catalogue samples have random colours), jointly with the structural weights, with
+their own L2 penalty (--colour-l2); the colour statistics are standardised with the tune photos'
+mean and deviation. A greyscale photo (mean chroma < 0.5) gets no colour term (search/selection.h).
 At match time a photo's score for a shader is the largest logit over its views plus
 alpha * log(best structural similarity of the shader's catalogue samples to the photo) - the
 catalogue's nearest-sample evidence, which recognises clean renders the classifier has not seen;
@@ -21,13 +28,22 @@ probabilities are the softmax of those scores. alpha is chosen on out-of-fold sc
 photos and on renders of another catalogue (bench_select_dump --synthetic, split "synthetic"),
 each counting half. The report split is never used for fitting: it is only scored.
 
-Calibration of "good" (search/match.h): the model is refitted on each half of the tune split
-(stratified by kind) and scores the other half; p_good is the smallest probability such that at
-least --precision of those out-of-fold top-1 choices with P >= p_good are right.
+Out-of-fold scores (every choice of options and alpha, and the calibration, use only these):
+the tune photos are cut into --folds folds GROUPED by texture series, so that two crops or
+recolours of one texture never sit on both sides: group = package + series stem, the stem being
+the first alphabetic word of the file name (lowercased; the prefixes "stktex" and "generic" of
+supertuxkart skipped): ufoai's wall003 ... wall_bricks006 are one group "ufoai-textures/wall",
+nexuiz's bark and bark2 one group, etr's rock01/06/07 one group. Groups are dealt to the folds
+largest first, each to the fold with the fewest photos (deterministic). --ungrouped gives the old
+2 folds (alternate photos by kind), for comparison only.
+
+Calibration of "good" (search/match.h): p_good is the smallest probability such that at least
+--precision of the out-of-fold top-1 choices with P >= p_good are right.
 """
 import argparse
 import json
 import os
+import re
 import sqlite3
 import sys
 
@@ -36,12 +52,24 @@ import numpy as np
 # Feature layout of the default metric (composite v106): spectrum 30, pyramid 160, colour 36,
 # structure 191. Colour [190, 226) is left out.
 STRUCTURAL = [(0, 190), (226, 417)]
+# search::kGreyscaleChroma: below this mean chroma a photo is greyscale and its colour term is left out.
+GREYSCALE_CHROMA = 0.5
 
 
 def softmax(L):
     L = L - L.max(axis=1, keepdims=True)
     P = np.exp(L)
     return P / P.sum(axis=1, keepdims=True)
+
+
+def series_group(photo, labels):
+    """package + series stem of a photo (see above); project photos are their own group."""
+    item = labels.get(os.path.splitext(os.path.basename(photo["path"]))[0])
+    if item is None:
+        return "other/" + os.path.basename(photo["path"])
+    words = [w for w in re.findall("[a-z]+", os.path.basename(item["path"].split("!")[-1]).lower())
+             if w not in ("stktex", "generic")]
+    return item["package"] + "/" + (words[0] if words else "")
 
 
 class Data:
@@ -84,6 +112,20 @@ class Data:
             at += p["scales"]
         self.S = np.fromfile(os.path.join(folder, "structural.f32"), dtype="<f4").reshape(
             len(self.photos), len(self.names)).astype(np.float64)
+        # Colour statistics per photo (NaN for synthetic rows: no image).
+        C = index.get("colour_size", 0)
+        self.C = (np.fromfile(os.path.join(folder, "colour.f32"), dtype="<f4").reshape(len(self.photos), C)
+                  .astype(np.float64) if C else np.zeros((len(self.photos), 0)))
+        tune = [i for i, p in enumerate(self.photos) if p["split"] == "tune"]
+        self.cmean = self.C[tune].mean(axis=0) if C else np.zeros(0)
+        self.cscale = (self.C[tune].std(axis=0) + 1e-6) if C else np.zeros(0)
+        self.CZ = np.nan_to_num((self.C - self.cmean) / np.where(self.cscale > 0, self.cscale, 1), nan=0.0)
+        # Greyscale photos (mean chroma [6] below search::kGreyscaleChroma = 0.5) get no colour term.
+        if C:
+            self.CZ[np.nan_to_num(self.C[:, 6], nan=0.0) < GREYSCALE_CHROMA] = 0.0
+        self.colour = False
+        self.colour_l2 = 0.05
+        self.precondition = True
         self.alpha = 0.0
         self.balance = False
         self.A = np.zeros((len(self.photos), len(self.names)))
@@ -97,57 +139,107 @@ class Data:
                       key=lambda i: (self.photos[i]["kind"], self.photos[i]["path"]))
 
     def train(self, photo_ids, l2, photo_weight, iterations=600, rate=0.5):
-        n, d = self.Z.shape
+        """(W, b, V): structural weights and bias, colour weights (zeros without --colour)."""
+        # Preconditioning: gradient descent runs on whitened features Z M, M = V diag(1/sqrt(e + 1)) V'
+        # (e, V: eigen-decomposition of the catalogue's feature covariance), and the weights are
+        # mapped back (W_features = M W), so the model and the header are unchanged in form.
+        # Without it the largest eigenvalue (82) makes the step of 0.5 unstable in the top
+        # directions (it needs < 2 / (0.5 * 82)): the weights oscillate, and the same fit in float32
+        # and float64 gave grouped out-of-fold top-1 0.32 and 0.21 (session 7).
+        M = self.whitening().astype(np.float32) if self.precondition else np.eye(self.Z.shape[1], dtype=np.float32)
+        # float32 arithmetic (twice as fast as float64; the weights are written as float anyway)
+        Z = self.Z.astype(np.float32) @ M
+        n, d = Z.shape
         K = len(self.names)
-        Y = np.eye(K)[self.y]
-        PR = np.array([self.TZ[v] for i in photo_ids for v in self.views[i]]).reshape(-1, d)
-        PA = np.array([self.A[i] for i in photo_ids for v in self.views[i]]).reshape(-1, K)
+        Y = np.eye(K, dtype=np.float32)[self.y]
+        PR = np.array([self.TZ[v] for i in photo_ids for v in self.views[i]], dtype=np.float32).reshape(-1, d) @ M
+        c = self.CZ.shape[1]
+        # the colour statistics are strongly correlated too (means and quantiles): whitened the same way
+        Mc = self.colour_whitening().astype(np.float32) if self.precondition else np.eye(c, dtype=np.float32)
+        PC = np.array([self.CZ[i] for i in photo_ids for v in self.views[i]], dtype=np.float32).reshape(-1, c) @ Mc
+        V = np.zeros((c, K), dtype=np.float32)
+        PA = np.array([self.A[i] for i in photo_ids for v in self.views[i]], dtype=np.float32).reshape(-1, K)
         # --balance: every kind weighs the same in total (a photo weighs 1 / its kind's photo count,
         # scaled to a mean of 1), so kinds with many photos do not dominate the photo term.
-        PW = np.ones(len(PR))
+        PW = np.ones(len(PR), dtype=np.float32)
         if self.balance and len(PR):
             count = {}
             for i in photo_ids:
                 count[self.photos[i]["kind"]] = count.get(self.photos[i]["kind"], 0) + 1
-            PW = np.array([1.0 / count[self.photos[i]["kind"]] for i in photo_ids for v in self.views[i]])
+            PW = np.array([1.0 / count[self.photos[i]["kind"]] for i in photo_ids for v in self.views[i]], dtype=np.float32)
             PW *= len(PW) / PW.sum()
-        W = np.zeros((d, K))
-        b = np.zeros(K)
+        W = np.zeros((d, K), dtype=np.float32)
+        b = np.zeros(K, dtype=np.float32)
+        rate, l2, photo_weight = np.float32(rate), np.float32(l2), np.float32(photo_weight)
+        colour_l2 = np.float32(self.colour_l2)
         for _ in range(iterations):
-            G = (softmax(self.Z @ W + b) - Y) / n
-            gW, gb = self.Z.T @ G, G.sum(axis=0)
+            G = (softmax(Z @ W + b) - Y) / np.float32(n)
+            gW, gb = Z.T @ G, G.sum(axis=0)
+            gV = None
             if len(PR) and photo_weight > 0:
-                Q = softmax(PR @ W + b)
+                Q = softmax(PR @ W + b + PC @ V)
                 target = Q * PA
                 target /= target.sum(axis=1, keepdims=True) + 1e-12
-                Gp = (Q - target) * (photo_weight * PW[:, None]) / len(PR)
+                Gp = (Q - target) * (photo_weight * PW[:, None]) / np.float32(len(PR))
                 gW += PR.T @ Gp
                 gb += Gp.sum(axis=0)
+                gV = PC.T @ Gp
             W -= rate * (gW + l2 * W)
             b -= rate * gb
-        return W, b
+            if self.colour and gV is not None:
+                V -= rate * (gV + colour_l2 * V)
+        return (M @ W).astype(np.float64), b.astype(np.float64), (Mc @ V).astype(np.float64)
 
-    def probabilities(self, W, b, i):
-        scores = (self.TZ[self.views[i]] @ W + b).max(axis=0) + self.alpha * np.log(np.maximum(self.S[i], 1e-6))
+    def colour_whitening(self):
+        if getattr(self, "_colour_whitening", None) is None:
+            tune = [i for i, p in enumerate(self.photos) if p["split"] == "tune"]
+            C = self.CZ[tune]
+            e, U = np.linalg.eigh(C.T @ C / max(1, len(C)))
+            self._colour_whitening = (U / np.sqrt(np.maximum(e, 0) + 1.0)) @ U.T
+        return self._colour_whitening
+
+    def whitening(self):
+        if getattr(self, "_whitening", None) is None:
+            e, U = np.linalg.eigh(self.Z.T @ self.Z / len(self.Z))
+            self._whitening = (U / np.sqrt(np.maximum(e, 0) + 1.0)) @ U.T
+        return self._whitening
+
+    def probabilities(self, model, i):
+        W, b, V = model
+        scores = ((self.TZ[self.views[i]] @ W + b).max(axis=0) + self.CZ[i] @ V
+                  + self.alpha * np.log(np.maximum(self.S[i], 1e-6)))
         return softmax(scores[None, :])[0]
 
 
-def score(data, W, b, ids):
+def score(data, model, ids):
     top1 = top3 = 0
     for i in ids:
-        order = np.argsort(-data.probabilities(W, b, i))
+        order = np.argsort(-data.probabilities(model, i))
         top1 += data.A[i, order[0]] > 0
         top3 += data.A[i, order[:3]].any()
     n = max(1, len(ids))
     return top1 / n, top3 / n
 
 
-def out_of_fold(data, ids, l2, photo_weight):
-    """Models fitted on each half of `ids` (alternate items by kind), each with the other half."""
+def fold_ids(data, ids, k, grouped, labels):
+    """The test photos of each fold: grouped by series (see above), or alternate items by kind."""
+    if not grouped:
+        return [[i for n, i in enumerate(ids) if n % 2 == fold] for fold in (0, 1)]
+    groups = {}
+    for i in ids:
+        groups.setdefault(series_group(data.photos[i], labels), []).append(i)
+    folds = [[] for _ in range(k)]
+    for name in sorted(groups, key=lambda g: (-len(groups[g]), g)):
+        min(folds, key=len).extend(groups[name])
+    return folds
+
+
+def out_of_fold(data, ids, l2, photo_weight, tests, extra=()):
+    """Models fitted without each fold's photos, each with its test photos; `extra` photos are
+    always trained on (e.g. the project photos with --train-project)."""
     folds = []
-    for fold in (0, 1):
-        train = [i for k, i in enumerate(ids) if k % 2 != fold]
-        test = [i for k, i in enumerate(ids) if k % 2 == fold]
+    for test in tests:
+        train = [i for i in ids if i not in set(test)] + list(extra)
         folds.append((data.train(train, l2, photo_weight), test))
     return folds
 
@@ -156,9 +248,9 @@ def choose_alpha(data, folds, synthetic_model, synthetic):
     best = None
     for alpha in [0, 0.5, 1, 2, 3, 4, 6, 8, 12]:
         data.alpha = alpha
-        photo = np.mean([data.A[i, int(np.argmax(data.probabilities(W, b, i)))] > 0 for (W, b), test in folds for i in test])
-        W, b = synthetic_model
-        synth = np.mean([data.A[i, int(np.argmax(data.probabilities(W, b, i)))] > 0 for i in synthetic]) if synthetic else 0
+        photo = np.mean([data.A[i, int(np.argmax(data.probabilities(m, i)))] > 0 for m, test in folds for i in test])
+        synth = np.mean([data.A[i, int(np.argmax(data.probabilities(synthetic_model, i)))] > 0
+                         for i in synthetic]) if synthetic else 0
         print("alpha %-4g out-of-fold tune top-1 %.3f, synthetic top-1 %.3f" % (alpha, photo, synth))
         if best is None or 0.5 * (photo + synth) > best[0] + 1e-9:
             best = (0.5 * (photo + synth), alpha)
@@ -169,9 +261,9 @@ def choose_alpha(data, folds, synthetic_model, synthetic):
 def calibrate(data, folds, precision):
     """p_good from the out-of-fold top-1 probabilities and rightness."""
     out = []
-    for (W, b), test in folds:
+    for m, test in folds:
         for i in test:
-            p = data.probabilities(W, b, i)
+            p = data.probabilities(m, i)
             k = int(np.argmax(p))
             out.append((p[k], data.A[i, k] > 0))
     out.sort(reverse=True)
@@ -185,7 +277,8 @@ def calibrate(data, folds, precision):
     return p_good, out, (sum(kept), len(kept))
 
 
-def write_header(path, data, W, b, version, p_good, argv, report):
+def write_header(path, data, model, version, p_good, argv, report):
+    W, b, V = model
     def array(values, per_line=8):
         vals = ["%.7g" % v for v in values]
         return ",\n".join("    " + ", ".join(vals[i:i + per_line]) for i in range(0, len(vals), per_line))
@@ -218,6 +311,12 @@ def write_header(path, data, W, b, version, p_good, argv, report):
         "// Logit of shader k = sum_f z_f kWeights[f * kShaders + k] + kBias[k].",
         "inline constexpr float kWeights[kFeatures * kShaders] = {", array(W.reshape(-1)), "};",
         "inline constexpr float kBias[kShaders] = {", array(b), "};",
+        "// Colour term (search::colour_statistics, fitted on the tune photos): logit of shader k +=",
+        "// sum_c ((s_c - kColourMean[c]) / kColourScale[c]) kColourWeights[c * kShaders + k].",
+        "inline constexpr std::size_t kColourFeatures = %d;" % V.shape[0],
+        "inline constexpr float kColourMean[kColourFeatures] = {", array(data.cmean), "};",
+        "inline constexpr float kColourScale[kColourFeatures] = {", array(data.cscale), "};",
+        "inline constexpr float kColourWeights[kColourFeatures * kShaders] = {", array(V.reshape(-1)), "};",
         "// Score of shader k = its largest logit over the views + kStructuralWeight * log(best",
         "// structural similarity of its catalogue samples to the whole photo).",
         "inline constexpr double kStructuralWeight = %g;" % data.alpha,
@@ -235,9 +334,20 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("folder", help="bench_select_dump output")
     ap.add_argument("--db", required=True, help="the catalogue the dump was made with")
+    ap.add_argument("--labels", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "realset", "labels.json"),
+                    help="labels of the photos (packages and paths, for the series groups)")
     ap.add_argument("--l2", type=float, default=0.05)
     ap.add_argument("--photo-weight", type=float, default=0.5)
     ap.add_argument("--balance", action="store_true", help="class-balanced photo weights (each kind weighs the same)")
+    ap.add_argument("--colour", action="store_true", help="fit the colour term (see above)")
+    ap.add_argument("--colour-l2", type=float, default=0.05, help="L2 penalty of the colour weights")
+    ap.add_argument("--folds", type=int, default=5, help="grouped out-of-fold folds")
+    ap.add_argument("--no-precondition", action="store_true", help="plain gradient descent (before session 7; unstable)")
+    ap.add_argument("--ungrouped", action="store_true", help="the old 2 ungrouped folds (comparison only)")
+    ap.add_argument("--train-project", action="store_true",
+                    help="train on the photos of split 'project' too (default: they are only scored)")
+    ap.add_argument("--score-report", action="store_true",
+                    help="also score the report split (the final check only: never choose options on it)")
     ap.add_argument("--precision", type=float, default=0.95, help="wanted precision of 'good'")
     ap.add_argument("--version", type=int, default=1)
     ap.add_argument("--alpha", type=float, default=None, help="structural weight (default: chosen, see above)")
@@ -245,35 +355,57 @@ def main():
     args = ap.parse_args()
     data = Data(args.folder, args.db)
     data.balance = args.balance
+    data.colour = args.colour
+    data.colour_l2 = args.colour_l2
+    data.precondition = not args.no_precondition
+    labels = {i["id"]: i for i in json.load(open(args.labels))["images"]}
     tune, report, synthetic = data.ids("tune"), data.ids("report"), data.ids("synthetic")
-    W, b = data.train(tune, args.l2, args.photo_weight)
-    folds = out_of_fold(data, tune, args.l2, args.photo_weight)
-    alpha = choose_alpha(data, folds, (W, b), synthetic) if args.alpha is None else args.alpha
+    project = data.ids("project")
+    extra = project if args.train_project else []
+    model = data.train(tune + extra, args.l2, args.photo_weight)
+    tests = fold_ids(data, tune, args.folds, not args.ungrouped, labels)
+    print("folds (%s): %s photos" % ("ungrouped 2" if args.ungrouped else "grouped by series",
+                                     " ".join(str(len(t)) for t in tests)))
+    folds = out_of_fold(data, tune, args.l2, args.photo_weight, tests, extra)
+    alpha = choose_alpha(data, folds, model, synthetic) if args.alpha is None else args.alpha
     data.alpha = alpha
     print("chosen alpha", alpha)
-    t1, t3 = score(data, W, b, tune)
-    r1, r3 = score(data, W, b, report)
+    t1, t3 = score(data, model, tune)
     print("tune   (%d photos, fitted on): top-1 %.3f top-3 %.3f" % (len(tune), t1, t3))
-    print("report (%d photos, held out) : top-1 %.3f top-3 %.3f" % (len(report), r1, r3))
     p_good, oof, (right, kept) = calibrate(data, folds, args.precision)
     if synthetic:
-        print("synthetic (%d renders of another catalogue): top-1 %.3f top-3 %.3f" % ((len(synthetic),) + score(data, W, b, synthetic)))
-    print("out-of-fold on tune: top-1 %.3f; p_good %.3f keeps %d of %d, %d right" % (
-        np.mean([ok for _, ok in oof]), p_good, kept, len(oof), right))
-    good = [(data.probabilities(W, b, i), i) for i in report]
-    called = [(p, i) for p, i in good if p.max() >= p_good]
-    print("report: top-1 with P >= p_good: %d, right %d" % (
-        len(called), sum(data.A[i, int(np.argmax(p))] > 0 for p, i in called)))
-    for i in tune + report + synthetic[::4]:
-        p = data.probabilities(W, b, i)
+        print("synthetic (%d renders of another catalogue): top-1 %.3f top-3 %.3f" % ((len(synthetic),) + score(data, model, synthetic)))
+    oof3 = np.mean([data.A[i, np.argsort(-data.probabilities(m, i))[:3]].any() for m, test in folds for i in test])
+    print("OUT-OF-FOLD tune: top-1 %.3f top-3 %.3f; p_good %.3f keeps %d of %d, %d right" % (
+        np.mean([ok for _, ok in oof]), oof3, p_good, kept, len(oof), right))
+    kinds = sorted({data.photos[i]["kind"] for i in tune})
+    per_kind = {k: [0, 0] for k in kinds}
+    for m, test in folds:
+        for i in test:
+            per_kind[data.photos[i]["kind"]][1] += 1
+            per_kind[data.photos[i]["kind"]][0] += data.A[i, int(np.argmax(data.probabilities(m, i)))] > 0
+    print("out-of-fold per kind: " + ", ".join("%s %d/%d" % (k, v[0], v[1]) for k, v in per_kind.items()))
+    shown = [(i, m) for m, test in folds for i in sorted(test)]
+    shown += [(i, model) for i in project] + [(i, model) for i in synthetic[::8]]
+    if args.score_report:
+        r1, r3 = score(data, model, report)
+        print("report (%d photos, held out) : top-1 %.3f top-3 %.3f" % (len(report), r1, r3))
+        good = [(data.probabilities(model, i), i) for i in report]
+        called = [(p, i) for p, i in good if p.max() >= p_good]
+        print("report: top-1 with P >= p_good: %d, right %d" % (
+            len(called), sum(data.A[i, int(np.argmax(p))] > 0 for p, i in called)))
+        shown += [(i, model) for i in report]
+    for i, m in shown:
+        p = data.probabilities(m, i)
         order = np.argsort(-p)[:3]
-        print("%-3s %-6s %-14s %-42s %s" % ("ok" if data.A[i, order[0]] else "BAD", data.photos[i]["split"],
+        split = data.photos[i]["split"] + ("-oof" if data.photos[i]["split"] == "tune" else "")
+        print("%-3s %-9s %-14s %-42s %s" % ("ok" if data.A[i, order[0]] else "BAD", split,
               data.photos[i]["kind"], os.path.basename(data.photos[i]["path"]),
               " ".join("%s %.2f" % (data.names[k], p[k]) for k in order)))
     if args.write:
-        report_line = "Report split: top-1 %.3f, top-3 %.3f (%d photos); tune top-1 %.3f." % (r1, r3, len(report), t1)
-        data.report_alpha = alpha
-        write_header(args.write, data, W, b, args.version, p_good, sys.argv, report_line)
+        report_line = "Grouped out-of-fold tune top-1 %.3f (%d photos); tune top-1 %.3f." % (
+            np.mean([ok for _, ok in oof]), len(oof), t1)
+        write_header(args.write, data, model, args.version, p_good, sys.argv, report_line)
         print("wrote", args.write)
 
 

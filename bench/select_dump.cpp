@@ -6,7 +6,9 @@
 // DIR/distances.f32: float32 little-endian, [photo][scale][sample of the catalogue in shader order][group];
 // DIR/targets.f32: float32, [photo][scale][feature] (the photo's composite features);
 // DIR/structural.f32: float32, [photo][shader]: the best structural similarity of the shader's
-// samples to the whole photo (what match's structural scan computes).
+// samples to the whole photo (what match's structural scan computes);
+// DIR/colour.f32: float32, [photo][search::kColourStatistics]: the photo's colour statistics
+// (search::colour_statistics; NaN for the --synthetic rows, which have no image).
 // --augment N: N photo-like renders of every catalogue sample (another zoom, a lighting gradient,
 // blur, sensor noise; seeded by --augment-seed), their features in DIR/augmented.f32
 // [render][feature] and their shader indices in evidence.json "augmented": training rows for
@@ -97,6 +99,13 @@ int main(int argc, char** argv) {
     std::ofstream dist(fs::path(out) / "distances.f32", std::ios::binary);
     std::ofstream targ(fs::path(out) / "targets.f32", std::ios::binary);
     std::ofstream structural(fs::path(out) / "structural.f32", std::ios::binary);
+    std::ofstream colour(fs::path(out) / "colour.f32", std::ios::binary);
+    auto write_colour = [&](const std::vector<double>& stats) {
+      for (double v : stats) {
+        const float f = static_cast<float>(v);
+        colour.write(reinterpret_cast<const char*>(&f), sizeof f);
+      }
+    };
     std::ifstream in(list);
     std::string line;
     std::vector<double> groups(composite->group_count());
@@ -134,6 +143,7 @@ int main(int argc, char** argv) {
       nlohmann::json entry = {{"path", path}, {"accepted", accepted}, {"split", split}, {"kind", kind},
                               {"scales", views.size()}};
       write_structural(metric.features(photo, 256));
+      write_colour(search::colour_statistics(photo));
       for (const auto& view : views) {
         write_target(metric.features(view.image, 256));
         entry["views"].push_back(view.name);
@@ -150,6 +160,7 @@ int main(int argc, char** argv) {
         for (size_t k = 0; k < cat2.samples.size(); ++k) {
           const auto& f = cat2.samples[k].features;
           write_structural(f);
+          write_colour(std::vector<double>(search::kColourStatistics, std::nan("")));
           write_target(f);
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
@@ -174,6 +185,7 @@ int main(int argc, char** argv) {
       }
     }
     index["feature_size"] = metric.feature_size();
+    index["colour_size"] = search::kColourStatistics;
     std::ofstream(fs::path(out) / "evidence.json") << index.dump(1);
     std::fprintf(stderr, "\n");
   } catch (const Error& e) {

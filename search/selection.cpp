@@ -40,6 +40,52 @@ double structural_similarity(const metrics::Metric& metric, const metrics::Featu
   return weight > 0 ? std::exp(log_s / weight) : metric.similarity(a.values, b);
 }
 
+std::vector<double> colour_statistics(const Image& photo) {
+  const Image square = center_crop_square(photo);
+  const size_t n = static_cast<size_t>(square.width) * square.height;
+  std::vector<float> channel[4];  // L*, a*, b*, C*
+  for (auto& c : channel) c.resize(n);
+  double hue_cos = 0, hue_sin = 0, chroma_total = 0;
+  auto f = [](double t) { return t > 216.0 / 24389.0 ? std::cbrt(t) : (24389.0 / 27.0 * t + 16.0) / 116.0; };
+  for (size_t i = 0; i < n; ++i) {
+    const float* p = square.pixels.data() + 3 * i;
+    const double r = std::max(0.0f, p[0]), g = std::max(0.0f, p[1]), b = std::max(0.0f, p[2]);
+    // linear sRGB -> XYZ (D65), normalised by the white point
+    const double x = (0.4124564 * r + 0.3575761 * g + 0.1804375 * b) / 0.95047;
+    const double y = 0.2126729 * r + 0.7151522 * g + 0.0721750 * b;
+    const double z = (0.0193339 * r + 0.1191920 * g + 0.9503041 * b) / 1.08883;
+    const double fx = f(x), fy = f(y), fz = f(z);
+    const double L = 116.0 * fy - 16.0, A = 500.0 * (fx - fy), B = 200.0 * (fy - fz);
+    const double C = std::hypot(A, B);
+    channel[0][i] = static_cast<float>(L);
+    channel[1][i] = static_cast<float>(A);
+    channel[2][i] = static_cast<float>(B);
+    channel[3][i] = static_cast<float>(C);
+    hue_cos += A;  // = C cos(h): chroma-weighted
+    hue_sin += B;
+    chroma_total += C;
+  }
+  std::vector<double> out;
+  for (auto& c : channel) {
+    double mean = 0, sq = 0;
+    for (float v : c) mean += v;
+    mean /= static_cast<double>(n);
+    for (float v : c) sq += (v - mean) * (v - mean);
+    out.push_back(mean);
+    out.push_back(std::sqrt(sq / static_cast<double>(n)));
+  }
+  for (auto& c : channel) {
+    for (double q : {0.1, 0.5, 0.9}) {
+      const auto at = c.begin() + static_cast<std::ptrdiff_t>(q * static_cast<double>(n - 1));
+      std::nth_element(c.begin(), at, c.end());
+      out.push_back(*at);
+    }
+  }
+  out.push_back(chroma_total > 0 ? hue_cos / chroma_total : 0.0);
+  out.push_back(chroma_total > 0 ? hue_sin / chroma_total : 0.0);
+  return out;
+}
+
 int selection_version() { return model::kVersion; }
 
 SelectionTarget::SelectionTarget(const Image& photo, const metrics::Metric& metric) {
@@ -61,6 +107,14 @@ SelectionTarget::SelectionTarget(const Image& photo, const metrics::Metric& metr
       for (size_t i = 0; i < model::kFeatures; ++i) logit += z[i] * model::kWeights[i * model::kShaders + k];
       logits_[k] = std::max(logits_[k], logit);
     }
+  }
+  // The colour term: the same for every view (colour statistics of the whole photo).
+  static_assert(model::kColourFeatures == kColourStatistics, "selection model and colour_statistics disagree");
+  const auto stats = colour_statistics(photo);
+  const bool greyscale = stats[6] < kGreyscaleChroma;  // [6]: mean chroma
+  for (size_t c = 0; c < (greyscale ? 0 : model::kColourFeatures); ++c) {
+    const double zc = (stats[c] - model::kColourMean[c]) / model::kColourScale[c];
+    for (size_t k = 0; k < model::kShaders; ++k) logits_[k] += zc * model::kColourWeights[c * model::kShaders + k];
   }
 }
 

@@ -10,6 +10,7 @@
 // generated search/selection_model.h). The refinement only tunes the parameters of likely
 // shaders, the final choice weighs the similarity with the selection's probability, and "good"
 // needs that probability (search/match.h).
+#include <cstddef>
 #include <span>
 #include <string>
 #include <vector>
@@ -34,6 +35,18 @@ std::vector<TargetView> target_views(const Image& photo, int resolution = 256);
 // not a composite).
 double structural_similarity(const metrics::Metric& metric, const metrics::Features& a, std::span<const float> b);
 
+// Colour statistics of a photo, for the selection's colour term (people tell grass, sky, rust,
+// marble and bricks apart partly by colour; the structural classifier cannot, because catalogue
+// samples have random colours). From the pixels of the centre square in CIELAB (D65, from linear
+// RGB): mean and standard deviation of L*, a*, b* and chroma C*, the 10/50/90 % quantiles of each,
+// and the chroma-weighted mean hue direction (cos, sin): kColourStatistics values, in that order.
+inline constexpr std::size_t kColourStatistics = 22;
+std::vector<double> colour_statistics(const Image& photo);
+// A photo whose mean chroma is below this (CIELAB units) is taken as a greyscale photo (R = G = B
+// gives exactly 0; the least colourful colour photo of the labelled set has 0.54): its colours
+// say nothing about the material, so the colour term is left out for it.
+inline constexpr double kGreyscaleChroma = 0.5;
+
 // The selection model's version (recorded in match results).
 int selection_version();
 
@@ -43,7 +56,8 @@ class SelectionTarget {
   // Throws proctex::Error when `metric` is not the metric the model was fitted on.
   SelectionTarget(const Image& photo, const metrics::Metric& metric);
   // Probability of each of `shaders`: softmax over them of each shader's largest logit over the
-  // views plus kStructuralWeight * log(its best structural similarity in the catalogue, given in
+  // views, plus its colour logit (a linear term of colour_statistics fitted on the tune photos),
+  // plus kStructuralWeight * log(its best structural similarity in the catalogue, given in
   // `best_structural`, same order): the nearest-sample evidence recognises clean renders. A shader
   // the model does not know (a user's shader) gets the lowest known logit.
   std::vector<double> probabilities(const std::vector<std::string>& shaders,

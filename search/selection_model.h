@@ -2658,6 +2658,14 @@ inline constexpr float kBias[kShaders] = {
     -0.2912028, 0.06436753, -0.7332991, -0.5962509, 0.04931867, 0.2685554, 0.1920798, -0.7471228,
     -0.2423455, 0.2422616, -0.04414845, -0.1794298, -0.133683
 };
+// Session 7: the colour arrays below (zero weights: no colour term) were added by hand so that
+// v1's weights build with the colour code; a refit with fit_selection.py --colour writes them.
+// Colour term (search::colour_statistics, fitted on the tune photos): logit of shader k +=
+// sum_c ((s_c - kColourMean[c]) / kColourScale[c]) kColourWeights[c * kShaders + k].
+inline constexpr std::size_t kColourFeatures = 22;
+inline constexpr float kColourMean[kColourFeatures] = {};
+inline constexpr float kColourScale[kColourFeatures] = {1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1};
+inline constexpr float kColourWeights[kColourFeatures * kShaders] = {};
 // Score of shader k = its largest logit over the views + kStructuralWeight * log(best
 // structural similarity of its catalogue samples to the whole photo).
 inline constexpr double kStructuralWeight = 1;
