@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -618,8 +619,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const metrics::MagnitudeMetric blurred_magnitude(o.coarse_resolution, kPolishBlurBins);
   const metrics::Features target_blurred = blurred_magnitude.features(target, o.coarse_resolution);
   const bool pattern = peakiness >= kPatternPeakiness;
-  const std::vector<AlignStage> stages_aligned = align_stages(target, o.resolution);
-  const ColourTarget registered_target = make_colour_target(target, o.resolution);
+  // What the align stage compares with, built on first use: most targets (photos) never reach it.
+  std::optional<std::vector<AlignStage>> stages_aligned;
+  std::optional<ColourTarget> registered_target;
   struct Candidate {
     const Refined* from;
     std::vector<float> packed;
@@ -761,7 +763,11 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
             align_starts.push_back(mirrored);
           }
         long align_evaluations = 0;
-        const auto r_align = align_pattern(align_space, align_starts, stages_aligned, renderer, base.seed,
+        if (!stages_aligned) {
+          stages_aligned = align_stages(target, o.resolution);
+          registered_target = make_colour_target(target, o.resolution);
+        }
+        const auto r_align = align_pattern(align_space, align_starts, *stages_aligned, renderer, base.seed,
                                            o.resolution, o.refine, align_evaluations);
         evaluations += align_evaluations;
         const std::vector<float> shaped = align_space.to_packed(r_align.unit);
@@ -769,7 +775,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         // squares at the refinement's resolution); the histogram fit competes in the final choice.
         const auto coloured = fit_colours(*base.decl, {shaped}, {base.seed}, pinned, colour_target, renderer, true).front();
         const auto registered =
-            fit_colours(*base.decl, {shaped}, {base.seed}, pinned, registered_target, renderer, false, true).front();
+            fit_colours(*base.decl, {shaped}, {base.seed}, pinned, *registered_target, renderer, false, true).front();
         evaluations += 2 * colour_fit_renders(*base.decl, pinned, 1);
         tries.push_back(registered.packed);
         names.push_back("registered_similarity");
