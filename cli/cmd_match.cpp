@@ -58,6 +58,10 @@ std::string next_step(const search::MatchResult& r, const std::string& photo) {
   int n = 0;
   for (const auto& c : r.candidates)
     if (c.shader != r.spec.shader && n < 3) others += (n++ ? "," : "") + c.shader;
+  if (r.pixel_exact)
+    return fmt::format("next: the pattern is reproduced pixel for pixel (RGB RMS difference {:.4f}, up to where it "
+                       "starts); render it at any size: proctex render SPEC.json -o big.png --size 4096",
+                       r.image_rmse);
   if (r.verdict == "good")
     return fmt::format("next: render it at any size: proctex render SPEC.json -o big.png --size 4096 "
                        "(the material is {:.0f}% likely by the selection)", 100 * r.probability);
@@ -159,8 +163,12 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
     if (!o.compare.empty()) write_compare(o.compare, target, img, result);
   }
   if (o.json) return print_json(j);
-  std::printf("%s: %s (similarity %.3f, %s)\n", o.photo.c_str(), result.spec.shader.c_str(),
-              shown(result.similarity, 3), result.verdict.c_str());
+  if (result.pixel_exact)
+    std::printf("%s: %s (%s: pixel-exact, RGB RMS difference %.4f; statistical similarity %.3f)\n", o.photo.c_str(),
+                result.spec.shader.c_str(), result.verdict.c_str(), result.image_rmse, shown(result.similarity, 3));
+  else
+    std::printf("%s: %s (similarity %.3f, %s)\n", o.photo.c_str(), result.spec.shader.c_str(),
+                shown(result.similarity, 3), result.verdict.c_str());
   std::printf("spec: %s\n", result.spec.to_json().dump().c_str());
   std::string parts;
   for (const auto& [k, v] : result.per_metric) parts += fmt::format("{}{} {:.3f}", parts.empty() ? "" : ", ", k, v);

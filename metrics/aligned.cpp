@@ -174,4 +174,27 @@ std::pair<int, int> AlignedMetric::best_shift(std::span<const float> a, std::spa
   return {int(s % window) - max_shift(), int(s / window) - max_shift()};
 }
 
+AlignedMetric::Registration AlignedMetric::register_rgb(const Image& target, const Image& render) const {
+  const int n = target.width;
+  if (target.height != n || render.width != n || render.height != n || n % size_ != 0)
+    throw Error("registering images needs two square images of one side, a multiple of " + std::to_string(size_),
+                "resize both to the same multiple");
+  const auto [cx, cy] = best_shift(features(render, n).values, features(target, n).values);
+  const int f = n / size_;
+  Registration best{1e300, 0, 0};
+  for (int dy = cy * f - f; dy <= cy * f + f; ++dy)
+    for (int dx = cx * f - f; dx <= cx * f + f; ++dx) {
+      double sum = 0;
+      for (int y = std::max(0, -dy); y < std::min(n, n - dy); ++y)
+        for (int x = std::max(0, -dx); x < std::min(n, n - dx); ++x) {
+          const float* p = target.pixel(x, y);
+          const float* q = render.pixel(x + dx, y + dy);
+          for (int c = 0; c < 3; ++c) sum += double(p[c] - q[c]) * (p[c] - q[c]);
+        }
+      const double rmse = std::sqrt(sum / (3.0 * (n - std::abs(dx)) * (n - std::abs(dy))));
+      if (rmse < best.rmse) best = {rmse, dx, dy};
+    }
+  return best;
+}
+
 }  // namespace proctex::metrics

@@ -42,6 +42,11 @@ inline constexpr double kGoodProbability = selection_model::kGoodProbability;
 // (measured on the labelled set), so there the similarity alone never makes a match good. Such a
 // pattern match also wins the final choice outright.
 inline constexpr double kCertainMatch = 0.75;
+// A deterministic shader's point whose render matches the target's pixels to this RGB RMS
+// difference (linear, 0-1; 1% of the range: no visible difference), on the overlap at the best
+// shift (metrics/aligned.h), is the same pattern: it wins the final choice and is "good" whatever
+// the statistical similarity says (that rated a pixel-exact chevron 0.60).
+inline constexpr double kPixelExactRmse = 0.01;
 // The final choice among the finalists maximises log S + kSelectionWeight * log P(shader): the
 // similarity as a likelihood and the selection as the prior, with equal say.
 inline constexpr double kSelectionWeight = 1.0;
@@ -87,6 +92,8 @@ struct MatchResult {
   bool pattern = false;                     // the target is a clean pattern (peaky spectrum)
   std::map<std::string, double> per_metric;  // components of the default metric
   std::string verdict;
+  double image_rmse = -1;                   // deterministic polish: registered RGB RMSE (-1: not measured)
+  bool pixel_exact = false;                 // image_rmse <= kPixelExactRmse: the same pattern, pixel for pixel
   long evaluations = 0;
   bool stopped_early = false;               // budget or Ctrl-C
   std::vector<Candidate> candidates;
