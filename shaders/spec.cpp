@@ -88,7 +88,8 @@ json parse_inline_value(const std::string& key, const std::string& raw) {
 float checked_number(const ShaderDecl& decl, const ParamDecl& p, const json& v) {
   if (!v.is_number()) bad_value(decl, p, "expected a number, got " + v.dump());
   const double d = v.get<double>();
-  if (!std::isfinite(d) || d < p.min || d > p.max)
+  // Compared in float, the declared bounds' type: 0.05 as typed is below 0.05f.
+  if (!std::isfinite(d) || static_cast<float>(d) < p.min || static_cast<float>(d) > p.max)
     bad_value(decl, p, "value " + v.dump() + " is out of range");
   if (p.type == ParamType::Int && d != std::round(d))
     bad_value(decl, p, "value " + v.dump() + " is not an integer");

@@ -81,6 +81,20 @@ TEST(Spec, RejectsOutOfRangeWrongTypeAndNonInteger) {
   EXPECT_THROW(resolve(d, parse_spec_argument("sample:size=abc")), UsageError);
 }
 
+// The bounds a shader declares are accepted as the user types them: 0.05 and 0.95 are not exactly
+// representable, and as doubles they lie outside the float bounds (they were rejected: "value
+// 0.05 is out of range ... [0.05, 0.95]").
+TEST(Spec, DeclaredBoundsAreInRange) {
+  const ShaderDecl d = parse_shader("shaders/test/duty.cl", R"(// @shader "x"
+// @param float duty = 0.5 [0.05, 0.95] "Fraction"
+float3 shade(float2 p, float fw, uint seed, const Params P) { return (float3)(P.duty); }
+)");
+  EXPECT_NO_THROW(resolve(d, parse_spec_argument("duty:duty=0.05")));
+  EXPECT_NO_THROW(resolve(d, parse_spec_argument("duty:duty=0.95")));
+  EXPECT_THROW(resolve(d, parse_spec_argument("duty:duty=0.0499")), UsageError);
+  EXPECT_THROW(resolve(d, parse_spec_argument("duty:duty=0.9501")), UsageError);
+}
+
 TEST(Spec, MalformedArgumentsAreUsageErrors) {
   EXPECT_THROW(parse_spec_argument(":a=1"), UsageError);
   EXPECT_THROW(parse_spec_argument("sample:size"), UsageError);
