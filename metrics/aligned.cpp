@@ -174,27 +174,58 @@ std::pair<int, int> AlignedMetric::best_shift(std::span<const float> a, std::spa
   return {int(s % window) - max_shift(), int(s / window) - max_shift()};
 }
 
-AlignedMetric::Registration AlignedMetric::register_rgb(const Image& target, const Image& render) const {
+AlignedMetric::Registration AlignedMetric::register_rgb(const Image& target, const Image& render) {
   const int n = target.width;
-  if (target.height != n || render.width != n || render.height != n || n % size_ != 0)
-    throw Error("registering images needs two square images of one side, a multiple of " + std::to_string(size_),
-                "resize both to the same multiple");
-  const auto [cx, cy] = best_shift(features(render, n).values, features(target, n).values);
-  const int f = n / size_;
-  Registration best{1e300, 0, 0};
-  for (int dy = cy * f - f; dy <= cy * f + f; ++dy)
-    for (int dx = cx * f - f; dx <= cx * f + f; ++dx) {
-      double sum = 0;
-      for (int y = std::max(0, -dy); y < std::min(n, n - dy); ++y)
-        for (int x = std::max(0, -dx); x < std::min(n, n - dx); ++x) {
-          const float* p = target.pixel(x, y);
-          const float* q = render.pixel(x + dx, y + dy);
-          for (int c = 0; c < 3; ++c) sum += double(p[c] - q[c]) * (p[c] - q[c]);
-        }
-      const double rmse = std::sqrt(sum / (3.0 * (n - std::abs(dx)) * (n - std::abs(dy))));
-      if (rmse < best.rmse) best = {rmse, dx, dy};
+  if (target.height != n || render.width != n || render.height != n || n < 4)
+    throw Error("registering images needs two square images of one side", "resize both to the same size");
+  // Every shift at once: the sum of squared differences on the overlap is sum a^2 + sum b^2 -
+  // 2 sum ab, the squares from summed-area tables, the cross term from an FFT correlation of the
+  // zero-padded channels (the plain, non-wrapping correlation for shifts below the side).
+  const int padded = 2 * n, reach = n / 4, window = 2 * reach + 1;
+  const size_t pixels = size_t(n) * n, half = size_t(padded) * (padded / 2 + 1);
+  std::vector<double> ssd(size_t(window) * window, 0.0);
+  detail::FftwArray<float> plane(size_t(padded) * padded), correlation(size_t(padded) * padded);
+  detail::FftwArray<detail::Complex> fa(half), fb(half);
+  std::vector<float> ca(pixels), cb(pixels);
+  for (int c = 0; c < 3; ++c) {
+    for (size_t i = 0; i < pixels; ++i) {
+      ca[i] = render.pixels[3 * i + c];
+      cb[i] = target.pixels[3 * i + c];
     }
-  return best;
+    for (auto [values, spectrum] : {std::pair{&ca, &fa}, std::pair{&cb, &fb}}) {
+      std::fill(plane.data(), plane.data() + plane.size(), 0.0f);
+      for (int y = 0; y < n; ++y) std::copy_n(values->data() + size_t(y) * n, n, plane.data() + size_t(y) * padded);
+      detail::fft_r2c(padded, padded, plane, *spectrum);
+    }
+    for (size_t i = 0; i < half; ++i) fa[i] *= std::conj(fb[i]);
+    detail::fft_c2r(padded, padded, fa, correlation);  // padded^2 * sum_p a(p + s) b(p)
+    const auto saa = summed_area(ca.data(), n, true), sbb = summed_area(cb.data(), n, true);
+    const double scale = 1.0 / (double(padded) * padded);
+    for (int dy = -reach; dy <= reach; ++dy)
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const int bx0 = std::max(0, -dx), bx1 = std::min(n, n - dx), by0 = std::max(0, -dy), by1 = std::min(n, n - dy);
+        const double cross = correlation[size_t((dy + padded) % padded) * padded + (dx + padded) % padded] * scale;
+        ssd[size_t(dy + reach) * window + dx + reach] += rect_sum(saa, n, bx0 + dx, by0 + dy, bx1 + dx, by1 + dy) +
+                                                         rect_sum(sbb, n, bx0, by0, bx1, by1) - 2 * cross;
+      }
+  }
+  std::vector<double> mse(ssd.size());
+  for (int dy = -reach; dy <= reach; ++dy)
+    for (int dx = -reach; dx <= reach; ++dx) {
+      const size_t i = size_t(dy + reach) * window + dx + reach;
+      mse[i] = std::max(0.0, ssd[i]) / (3.0 * (n - std::abs(dx)) * (n - std::abs(dy)));
+    }
+  const size_t at = best_index(mse, reach);
+  const int dx = int(at % window) - reach, dy = int(at / window) - reach;
+  // The reported residual directly at that shift: the FFT's a^2 + b^2 - 2ab cancels to ~1e-4.
+  double sum = 0;
+  for (int y = std::max(0, -dy); y < std::min(n, n - dy); ++y)
+    for (int x = std::max(0, -dx); x < std::min(n, n - dx); ++x) {
+      const float* p = target.pixel(x, y);
+      const float* q = render.pixel(x + dx, y + dy);
+      for (int c = 0; c < 3; ++c) sum += double(p[c] - q[c]) * (p[c] - q[c]);
+    }
+  return {std::sqrt(sum / (3.0 * (n - std::abs(dx)) * (n - std::abs(dy)))), dx, dy};
 }
 
 }  // namespace proctex::metrics

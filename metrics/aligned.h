@@ -53,16 +53,16 @@ class AlignedMetric final : public Metric {
   // a(x + dx, y + dy) ~ b(x, y) up to each component's gain and offset.
   std::pair<int, int> best_shift(std::span<const float> a, std::span<const float> b) const;
 
-  // How exactly `render` reproduces `target` in its own colours (both square, same side, a
-  // multiple of size()): the RGB RMS difference on their overlap at the best whole-pixel shift.
-  // The shift is found on the principal components at size() (best_shift) and refined at the
-  // images' side within one coarse pixel. No colour fit: a recovered pattern in the wrong colours
-  // is not exact.
+  // How exactly `render` reproduces `target` in its own colours (both square, same side): the RGB
+  // RMS difference on their overlap at the best whole-pixel shift within a quarter of the side
+  // (every shift, exactly, by FFT; ties to the shortest). No colour fit and no principal
+  // components: a recovered pattern in the wrong colours is not exact, and stripes in swapped
+  // colours are exact only at the shift that swaps them back.
   struct Registration {
     double rmse = 0.0;
     int dx = 0, dy = 0;  // render(x + dx, y + dy) ~ target(x, y), in the images' pixels
   };
-  Registration register_rgb(const Image& target, const Image& render) const;
+  static Registration register_rgb(const Image& target, const Image& render);
 
  private:
   // The unexplained energy per pixel at every shift within +-max_shift(), row-major.

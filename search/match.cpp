@@ -809,12 +809,11 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     double kept_rmse = -1;
     if (polish["deterministic"]) {
       if (!registered_target) registered_target = make_colour_target(target, o.resolution);
-      const metrics::AlignedMetric aligned(o.resolution % 2 == 0 ? o.resolution / 2 : o.resolution);
       nlohmann::json rmses = nlohmann::json::object();
       int exact = -1;
       double exact_rmse = kPixelExactRmse;
       for (size_t k = 0; k < tries.size(); ++k) {
-        const double rmse = aligned.register_rgb(registered_target->rgb, images[k]).rmse;
+        const double rmse = metrics::AlignedMetric::register_rgb(registered_target->rgb, images[k]).rmse;
         rmses[names[k]] = rmse;
         if (rmse <= exact_rmse) {
           exact_rmse = rmse;

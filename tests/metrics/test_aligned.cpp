@@ -83,3 +83,53 @@ TEST(Aligned, BestShiftIsWhereThePatternStarts) {
   EXPECT_EQ(dx, 5);
   EXPECT_EQ(dy, 0);
 }
+
+// register_rgb: how exactly a render reproduces a target in its own colours, where the pattern
+// may start elsewhere. A match calls a deterministic result "pixel-exact" on it (search/match.h).
+namespace {
+
+// RGB RMS of render(x + dx, y + dy) against target(x, y) on the overlap: the definition, by hand.
+double rmse_at(const Image& target, const Image& render, int dx, int dy) {
+  const int n = target.width;
+  double sum = 0;
+  size_t count = 0;
+  for (int y = std::max(0, -dy); y < std::min(n, n - dy); ++y)
+    for (int x = std::max(0, -dx); x < std::min(n, n - dx); ++x, ++count)
+      for (int c = 0; c < 3; ++c) sum += std::pow(double(render.pixel(x + dx, y + dy)[c]) - target.pixel(x, y)[c], 2);
+  return std::sqrt(sum / (3.0 * count));
+}
+
+}  // namespace
+
+TEST(Aligned, RegistrationFindsTheShiftThatReproducesThePixels) {
+  const Image target = bars(256, 8, 0.3, 0.1, kRed, kCream);
+  // The same bars starting 12 px further right: render(x + 12, y) = target(x, y).
+  const auto r = AlignedMetric::register_rgb(target, bars(256, 8, 0.3, 0.1, kRed, kCream, 12));
+  EXPECT_LT(r.rmse, 1e-4);
+  EXPECT_EQ(r.dx, 12);
+  EXPECT_EQ(r.dy, 0);
+}
+
+TEST(Aligned, RegistrationComparesColoursAsTheyAre) {
+  const Image target = bars(256, 8, 0.5, 0.0, kRed, kCream);
+  // Swapped colours at duty 0.5 are the same bars half a period (16 px) on: exact there only.
+  const auto swapped = AlignedMetric::register_rgb(target, bars(256, 8, 0.5, 0.0, kCream, kRed));
+  EXPECT_LT(swapped.rmse, 1e-4);
+  EXPECT_EQ(std::abs(swapped.dx), 16);
+  // Other colours are not explained away (the aligned metric's distance would call them equal).
+  const auto recoloured = AlignedMetric::register_rgb(target, bars(256, 8, 0.5, 0.0, kBlue, kCream));
+  EXPECT_GT(recoloured.rmse, 0.1);
+  EXPECT_NEAR(recoloured.rmse, rmse_at(target, bars(256, 8, 0.5, 0.0, kBlue, kCream), recoloured.dx, recoloured.dy), 1e-4);
+}
+
+TEST(Aligned, RegistrationReportsTheBestShiftsResidual) {
+  // A slightly wider duty: no shift explains it; the reported RMS is the hand-computed one at the
+  // reported shift, and no other shift in a neighbourhood does better.
+  const Image target = bars(256, 8, 0.3, 0.0, kRed, kCream);
+  const Image render = bars(256, 8, 0.34, 0.0, kRed, kCream, 5);
+  const auto r = AlignedMetric::register_rgb(target, render);
+  EXPECT_NEAR(r.rmse, rmse_at(target, render, r.dx, r.dy), 1e-4);
+  for (int dy = -3; dy <= 3; ++dy)
+    for (int dx = r.dx - 3; dx <= r.dx + 3; ++dx) EXPECT_GE(rmse_at(target, render, dx, dy) + 1e-6, r.rmse);
+  EXPECT_GT(r.rmse, 0.02);
+}
