@@ -175,13 +175,19 @@ constexpr long kSettleEvaluations = 80;  // the settle's renders (default metric
 constexpr long kAlignEvaluations = 300;
 constexpr int kAlignMirrorPairDims = 6;  // up to this many dimensions, pairs are mirrored too
 
-bool nearly_deterministic(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed) {
+// Mean |difference| between renders of one point with two seeds (64 px, linear RGB): 0 for a
+// seed-independent point.
+double seed_difference(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed) {
   RenderSettings s;
   s.width = s.height = 64;
   const auto images = renderer.render_batch(decl, {packed, packed}, {seed, seed ^ 0x5bd1e995u}, s);
   double diff = 0;
   for (size_t i = 0; i < images[0].pixels.size(); ++i) diff += std::fabs(images[0].pixels[i] - images[1].pixels[i]);
-  return diff / double(images[0].pixels.size()) < 0.004;
+  return diff / double(images[0].pixels.size());
+}
+
+bool nearly_deterministic(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed) {
+  return seed_difference(renderer, decl, packed, seed) < 0.004;
 }
 
 // Share of the lightness spectrum's energy (DC left out) in its strongest 2% of coefficients:
@@ -335,6 +341,7 @@ nlohmann::json MatchResult::to_json() const {
           {"selection_probability", probability},
           {"pattern", pattern},
           {"pixel_exact", pixel_exact},
+          {"visibly_other", visibly_other},
           {"image_rmse", image_rmse >= 0 ? nlohmann::json(image_rmse) : nlohmann::json(nullptr)},
           {"polish", polish},
           {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}}},
@@ -630,7 +637,19 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     double similarity;
     metrics::Features features;
     nlohmann::json polish;
-    double image_rmse = -1;  // deterministic polish only: registered RGB RMSE (metrics/aligned.h)
+    double image_rmse = -1;  // deterministic polish, or a seed-independent point on a clean pattern:
+                             // registered RGB RMSE (metrics/aligned.h)
+    bool seed_independent = false;  // measured on clean patterns only
+  };
+  // On a clean pattern, a seed-independent finalist's registered RMS: what decides whether its
+  // S >= kCertainMatch may still call it "good" (kVisiblyOtherRmse).
+  const auto measure_exactness = [&](Candidate& c, const Image& render) {
+    if (!pattern) return;
+    c.seed_independent = seed_difference(renderer, *c.from->decl, c.packed, c.from->seed) == 0.0;
+    evaluations += 2;
+    if (!c.seed_independent) return;
+    if (!registered_target) registered_target = make_colour_target(target, o.resolution);
+    c.image_rmse = metrics::AlignedMetric::register_rgb(registered_target->rgb, render).rmse;
   };
   std::vector<Candidate> final_candidates;
   for (size_t i = 0; i < refined.size(); ++i) {
@@ -641,6 +660,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     ++evaluations;
     result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
     final_candidates.push_back({&rf, rf.packed, s, std::move(f), nlohmann::json::object()});
+    measure_exactness(final_candidates.back(), img);
+    if (final_candidates.back().image_rmse >= 0) result.starts[i]["image_rmse"] = final_candidates.back().image_rmse;
   }
 
   // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
@@ -856,9 +877,12 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (kept >= 0) polish["kept_point"] = names[kept];
     // Kept only if the default similarity agrees that it is better than the shader's finalists,
     // or if it is pixel-exact.
-    if (kept >= 0)
+    if (kept >= 0) {
       final_candidates.push_back({&base, tries[kept], best_s, std::move(features[kept]), polish, kept_rmse});
-    else
+      if (pattern)
+        final_candidates.back().seed_independent =
+            seed_difference(renderer, *base.decl, tries[kept], base.seed) == 0.0;
+    } else
       final_candidates[best_of_shader].polish = polish;
     result.starts[best_of_shader]["polish"] = polish;
     if (kept >= 0) result.starts[best_of_shader]["polished_similarity"] = best_s;
@@ -870,8 +894,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   double best = -1e300;
   for (auto& c : final_candidates) {
     const bool pixel_exact = c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse;
+    const bool visibly_other = pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
     const double score = pixel_exact ? 2e6 - c.image_rmse
-                         : pattern && c.similarity >= kCertainMatch
+                         : pattern && c.similarity >= kCertainMatch && !visibly_other
                              ? 1e6 + c.similarity
                              : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
     if (score > best) {
@@ -882,6 +907,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       result.polish = c.polish;
       result.image_rmse = c.image_rmse;
       result.pixel_exact = pixel_exact;
+      result.visibly_other = visibly_other;
       result.per_metric.clear();
       if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
         for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
@@ -892,7 +918,11 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   result.timings["final"] = seconds_since(t_final);
   result.evaluations = evaluations;
   result.pattern = peakiness >= kPatternPeakiness;
-  result.verdict = result.pixel_exact ? "good" : verdict_for(result.similarity, result.probability, result.pattern);
+  // A seed-independent result that registers visibly off the target is not an exact recovery,
+  // whatever its similarity: the clean-pattern rule (S >= kCertainMatch) does not make it good.
+  result.verdict = result.pixel_exact ? "good"
+                                      : verdict_for(result.similarity, result.probability,
+                                                    result.pattern && !result.visibly_other);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above
   nlohmann::json names = nlohmann::json::array();
