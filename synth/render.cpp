@@ -16,6 +16,7 @@
 
 #include "core/error.h"
 #include "image/io.h"
+#include "synth/timing.h"
 
 namespace proctex::synth {
 namespace fs = std::filesystem;
@@ -322,6 +323,7 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
   std::vector<int32_t> S, P;
   const int R = o.blend_seams ? o.blend_radius : 0;
   const SeamBlend blend(std::max(R, 1), ex.width(), ex.height(), synth.analysis().toroidal);
+  timing::mark("output files opened, palettes");
   for (int y0 = 0; y0 < win.height; y0 += rows_per_strip) {
     const int rows = std::min(rows_per_strip, win.height - y0);
     const size_t n = static_cast<size_t>(win.width) * rows;
@@ -337,6 +339,7 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
       S = synth.synthesise(Window{win.x, win.y + y0, win.width, rows}, options);
     }
     stats.peak_strip_pixels = std::max(stats.peak_strip_pixels, n);
+    timing::mark("strip copied out");
     for (auto& t : targets) {
       buffer.resize(n * t.palette.texel_bytes);
       if (R > 0) {
@@ -348,7 +351,9 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
                       t.palette.texel_bytes);
         }
       }
+      timing::mark(R > 0 ? "seam blend" : "colour gather");
       t.file->write(y0, rows, t.palette.type, buffer.data());
+      timing::mark("encode + write rows");
     }
     if (coords) {
       coord_rows.resize(n * 3);
@@ -366,6 +371,7 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
   if (coords) coords->close();
   for (auto& t : targets) t.file->commit();
   if (coords) coords->commit();
+  timing::mark("close + rename files");
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }

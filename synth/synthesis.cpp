@@ -1,5 +1,6 @@
 #include "synth/synthesis.h"
 #include "synth/plane.h"
+#include "synth/timing.h"
 
 #include <algorithm>
 #include <cmath>
@@ -398,6 +399,7 @@ int passes_at(const Analysis& a, const SynthOptions& o, int level) {
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
   auto& rt = ocl::Runtime::instance();
+  timing::mark("OpenCL platform, context, queue");
   device_->program = rt.program(kSource, "-cl-std=CL1.2");
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
@@ -406,6 +408,7 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     return 0;
   });
+  timing::mark("program build / binary cache load");
   if (!analysis.texels.empty()) {
     device_->texels = ocl::upload(analysis.texels);
     device_->texel_channels = analysis.texel_channels;
@@ -418,6 +421,7 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     d.projection = ocl::upload(lv.projection);
     device_->levels.push_back(std::move(d));
   }
+  timing::mark("analysis upload to the device");
 }
 
 Synthesizer::~Synthesizer() = default;
@@ -498,6 +502,12 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
                 static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
                 static_cast<cl_int>(o.pastes.size()), shift_buffer, static_cast<cl_int>(shift_count));
+    auto phase = [&](const char* what) {
+      if (!timing::enabled()) return;
+      ocl::finish();
+      timing::mark(fmt::format("level {} {} ({}x{})", l, what, r.w, r.h));
+    };
+    phase("upsample + jitter");
     const auto& lv = dev.levels[l];
     for (int pass = 0; pass < passes_at(a, o, l); ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
@@ -510,6 +520,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                     static_cast<cl_int>(std::lround(o.kappa * 256)));
       }
     }
+    if (passes_at(a, o, l) > 0) phase("correction");
     if (l == L && o.refine_passes > 0) {
       const bool periodic = o.period_x > 0;
       cl::Buffer previous;
@@ -537,6 +548,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
         }
       }
     }
+    if (l == L && o.refine_passes > 0) phase("seam refinement");
     if (l == L && rematch > 0) {
       const bool periodic = o.period_x > 0;
       cl::Buffer previous;
@@ -562,6 +574,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
         }
       }
     }
+    if (l == L && rematch > 0) phase("re-match");
     parent = S;
     parent_region = r;
     parent_zero = false;
@@ -574,6 +587,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                         reinterpret_cast<cl_int2*>(out.data()) + static_cast<size_t>(y) * win.width);
   }
   ocl::finish();
+  timing::mark("readback");
   return out;
 }
 
