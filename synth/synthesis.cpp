@@ -76,12 +76,9 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
 
 // One correction sub-pass: the pixels whose absolute coordinates have parity (parx, pary). The
 // other classes are read only, so the update in place is race-free and order-independent.
-kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
-                    global const char* A, global const short* NE, global const int* C1,
-                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
-  const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
-  const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
-  if (i >= w || j >= h) return;
+void sy_correct_px(global int2* S, int i, int j, int w, int h,
+                   global const char* A, global const short* NE, global const int* C1,
+                   constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
   // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
   // keep it. Only the pixels on a join between patches are matched; at the finer levels, where
@@ -150,20 +147,34 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   }
   S[(long)j * w + i] = best;
 }
+kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+                       global const char* A, global const short* NE, global const int* C1,
+                       constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
+  const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
+  const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
+  if (i >= w || j >= h) return;
+  sy_correct_px(S, i, j, w, h, A, NE, C1, P, spacing, ew, eh, toroidal, kappa);
+}
+// Sub-passes of the refinement and the re-match: the two colours of the checkerboard of the ABSOLUTE
+// coordinates (so windows agree; a tileable period is even, so the colouring is periodic too). A
+// sub-pass reads the previous state (Sin) and writes every pixel to S (ping-pong buffers), so it is
+// race-free although a pixel reads up to 3 px around; a pass (2 sub-passes) reaches 2x the read
+// radius, which bounds the window padding. Adjacent pixels are never decided together (the cause
+// of the all-at-once update's worse joins); the 3x3 / 4x4 in-place classes used before reached 9
+// and 16 times the radius (18 and 48 px of padding) for 0.00-0.05 better bench coherence.
+int sy_in_class(long x, long y, int parity) { return parity < 0 || (int)((x + y) & 1) == parity; }
 // Seam refinement at the finest level: a pixel on a join between patches takes the coherent
 // candidate of one of its 8 neighbours (u = S[p + e] - e) whose wider surroundings match best: the
 // appearance vectors at the 24 taps p + d, 0 < max(|dx|, |dy|) <= 2, compared with those at u + d
 // (each appearance vector already describes a 5x5 neighbourhood, so the footprint is 9x9). The
-// pixel's current position competes as well and wins ties. Sub-passes are the 3x3 classes of the
-// absolute coordinates (a pixel reads up to 2 pixels away, so one class never reads itself), and
-// S_in = S_out. A tileable plane's period need not be a multiple of 3, so there (parx < 0) every
-// pixel is updated at once from a copy of the previous state (S_in), which keeps the output periodic.
-kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+// pixel's current position competes as well and wins ties. Two sub-passes (checkerboard, above).
+kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
                       global const char* A, int ew, int eh, int toroidal) {
-  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 3) + 3 * get_global_id(0);
-  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 3) + 3 * get_global_id(1);
+  const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const int2 s0 = Sin[(long)j * w + i];
+  S[(long)j * w + i] = s0;
+  if (!sy_in_class(ox + i, oy + j, parity)) return;
   int2 cand[9];
   int n = 0;
   cand[n++] = s0;
@@ -221,17 +232,17 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 // Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
 // ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
 // of the 3x3 (C1[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
-// around p (48 taps, the centre excluded; the first 8 channels, quantised). Sub-passes are the 4x4
-// classes of the absolute coordinates (a pixel reads 3 px around); a tileable plane updates every
-// pixel at once from a copy (parx < 0), as sy_refine.
+// around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
+// (checkerboard, above).
 #define SY_RM_CH 8
 int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
-kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
-                       global const short* T, int C, global const int* C1, int ew, int eh, int toroidal) {
-  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 4) + 4 * get_global_id(0);
-  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 4) + 4 * get_global_id(1);
+kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
+                       global const short* T, int C, global const int* C1, int ew, int eh, int toroidal, int kmode) {
+  const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const int2 s0 = Sin[(long)j * w + i];
+  S[(long)j * w + i] = s0;
+  if (!sy_in_class(ox + i, oy + j, parity)) return;
   // Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep.
   int inside = 1;
   for (int e = 0; e < 9 && inside; ++e) {
@@ -251,6 +262,7 @@ kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, lon
     const int2 c = Sin[(long)nj * w + ni];
     for (int kk = 0; kk < 2; ++kk) {
       if (kk == 0 && ex == 0 && ey == 0) continue;
+      if (kk == 1 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue;
       int ux = c.x, uy = c.y;
       if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
       ux -= ni - i;
@@ -320,6 +332,9 @@ int ctz64(int64_t v) {
 }
 
 using detail::kMaxCoordinate;
+
+// Which k-coherence candidates the re-match tries: 0 none, 1 the pixel's own, 2 those of the 3x3.
+constexpr int kRematchCoherence = 2;
 
 template <typename... Args>
 void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
@@ -436,12 +451,10 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   const int L = a.levels;
   const int l0 = first_level(a, o);
   // The reach of level l's correction: each sub-pass reads one pixel around, 4 per pass.
-  // At the finest level the seam refinement's 9 sub-passes read 2 pixels around each, the re-match's
-  // 16 sub-passes 3 pixels.
+  // At the finest level the seam refinement's 2 sub-passes read 2 pixels around each, the re-match's
+  // 2 sub-passes 3 pixels.
   const int rematch = a.texels.empty() ? 0 : o.rematch_passes;
-  auto pad_at = [&](int l) {
-    return 4 * passes_at(a, o, l) + 2 + (l == L ? 18 * o.refine_passes + 48 * rematch : 0);
-  };
+  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2 + (l == L ? 4 * o.refine_passes + 6 * rematch : 0); };
   const int pad = pad_at(L);
   // Regions, finest first: E_L = window + pad_L; E_{l-1} = parents(E_l) + pad_{l-1}.
   std::vector<Region> region(L + 1);
@@ -509,7 +522,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     };
     phase("upsample + jitter");
     const auto& lv = dev.levels[l];
-    for (int pass = 0; pass < passes_at(a, o, l); ++pass) {
+    const int level_passes = passes_at(a, o, l);
+    for (int pass = 0; pass < level_passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
@@ -521,58 +535,24 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       }
     }
     if (passes_at(a, o, l) > 0) phase("correction");
-    if (l == L && o.refine_passes > 0) {
-      const bool periodic = o.period_x > 0;
-      cl::Buffer previous;
-      if (periodic) {
-        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
-          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
-        });
-      }
-      for (int pass = 0; pass < o.refine_passes; ++pass) {
-        if (periodic) {
-          ocl::with_cl_errors("copying a synthesis level", [&] {
-            return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
-          });
-          launch2d(dev.refine, r.w, r.h, previous, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), cl_int(-1), cl_int(-1), lv.appearance,
-                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
-                   static_cast<cl_int>(a.toroidal ? 1 : 0));
-          continue;
+    if (l == L && (o.refine_passes > 0 || rematch > 0)) {
+      // Ping-pong between S and a second buffer: each sub-pass reads the previous state.
+      cl::Buffer other = ocl::with_cl_errors("allocating synthesis level", [&] {
+        return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
+      });
+      auto run = [&](cl::Kernel& kernel, int passes, auto&&... rest) {
+        for (int sub = 0; sub < 2 * passes; ++sub) {
+          launch2d(kernel, r.w, r.h, S, other, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1), rest...);
+          std::swap(S, other);
         }
-        for (int sub = 0; sub < 9; ++sub) {
-          launch2d(dev.refine, (r.w + 2) / 3, (r.h + 2) / 3, S, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub % 3),
-                   static_cast<cl_int>(sub / 3), lv.appearance, static_cast<cl_int>(a.width),
-                   static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
-        }
-      }
-    }
-    if (l == L && o.refine_passes > 0) phase("seam refinement");
-    if (l == L && rematch > 0) {
-      const bool periodic = o.period_x > 0;
-      cl::Buffer previous;
-      if (periodic) {
-        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
-          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
-        });
-      }
-      for (int pass = 0; pass < rematch; ++pass) {
-        const int subs = periodic ? 1 : 16;
-        for (int sub = 0; sub < subs; ++sub) {
-          if (periodic) {
-            ocl::with_cl_errors("copying a synthesis level", [&] {
-              return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
-            });
-          }
-          const int gx = periodic ? r.w : (r.w + 3) / 4, gy = periodic ? r.h : (r.h + 3) / 4;
-          launch2d(dev.rematch, gx, gy, periodic ? previous : S, S, static_cast<cl_int>(r.w),
-                   static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
-                   static_cast<cl_int>(periodic ? -1 : sub % 4), static_cast<cl_int>(periodic ? -1 : sub / 4),
-                   dev.texels, static_cast<cl_int>(dev.texel_channels), lv.coherent, static_cast<cl_int>(a.width),
-                   static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
-        }
-      }
+      };
+      run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
+          static_cast<cl_int>(a.toroidal ? 1 : 0));
+      if (o.refine_passes > 0) phase("seam refinement");
+      run(dev.rematch, rematch, dev.texels, static_cast<cl_int>(dev.texel_channels), lv.coherent,
+          static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
+          static_cast<cl_int>(kRematchCoherence));
     }
     if (l == L && rematch > 0) phase("re-match");
     parent = S;

@@ -288,7 +288,7 @@ double coherence(const std::vector<int32_t>& S, int w, int h, int ew, int column
 }
 
 TEST(Synth, SeamRefinementKeepsWindowsExactAndPatchesWhole) {
-  // The refinement's 9 sub-passes read 2 pixels around: a window must still equal the same region
+  // The refinement's 2 checkerboard sub-passes read 2 pixels around: a window must still equal the same region
   // of a larger synthesis (also a single pixel), on a toroidal and on a bounded exemplar.
   for (const bool torus : {true, false}) {
     Synthesizer s(torus ? periodic_analysis() : photo_analysis());
@@ -353,7 +353,7 @@ double patch_coherence(const Image& out, const Image& ex) {
 }
 
 TEST(Synth, FinalRematchKeepsWindowsExactAndPatchesWhole) {
-  // The re-match's 16 sub-passes read 3 pixels around: windows stay exact (toroidal and bounded
+  // The re-match's 2 checkerboard sub-passes read 3 pixels around: windows stay exact (toroidal and bounded
   // exemplars, a single pixel) and the thread count does not matter (covered by the determinism test).
   for (const bool torus : {true, false}) {
     Synthesizer s(torus ? periodic_analysis() : photo_analysis());
