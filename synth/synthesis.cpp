@@ -234,10 +234,12 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 // of the 3x3 (C1[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
 // around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
 // (checkerboard, above).
-#define SY_RM_CH 8
 int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
+// T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
+// multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
+// as the channel-by-channel loop).
 kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
-                       global const short* T, int C, global const int* C1, int ew, int eh, int toroidal, int kmode) {
+                       global const short8* T, global const int* C1, int ew, int eh, int toroidal, int kmode) {
   const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const int2 s0 = Sin[(long)j * w + i];
@@ -280,17 +282,14 @@ kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, lon
   }
   if (n == 1) return;
   // The texels the synthesis has around p.
-  const int ch = min(C, SY_RM_CH);
-  short ref[48 * SY_RM_CH];
+  int8 ref[48];
   int t = 0;
   for (int dy = -3; dy <= 3; ++dy) {
     const int nj = clamp(j + dy, 0, h - 1);
     for (int dx = -3; dx <= 3; ++dx) {
       if (dx == 0 && dy == 0) continue;
       const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)];
-      global const short* src = T + ((long)q.y * ew + q.x) * C;
-      for (int c = 0; c < ch; ++c) ref[t * SY_RM_CH + c] = src[c];
-      ++t;
+      ref[t++] = convert_int8(T[(long)q.y * ew + q.x]);
     }
   }
   int2 best = s0;
@@ -303,16 +302,17 @@ kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, lon
     t = 0;
     for (int dy = -3; dy <= 3 && d < bestd; ++dy) {
       const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh);
+      global const short8* row = T + (long)uy * ew;
+      int8 acc = (int8)(0);
       for (int dx = -3; dx <= 3; ++dx) {
         if (dx == 0 && dy == 0) continue;
         const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew);
-        global const short* src = T + ((long)uy * ew + ux) * C;
-        for (int c = 0; c < ch; ++c) {
-          const int e = (int)ref[t * SY_RM_CH + c] - (int)src[c];
-          d += e * e;
-        }
-        ++t;
+        const int8 e = ref[t++] - convert_int8(row[ux]);
+        acc += e * e;
       }
+      const int4 a4 = acc.lo + acc.hi;
+      const int2 a2 = a4.lo + a4.hi;
+      d += a2.x + a2.y;
     }
     if (d < bestd) { bestd = d; best = cand[k]; }
   }
@@ -425,8 +425,14 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
   });
   timing::mark("program build / binary cache load");
   if (!analysis.texels.empty()) {
-    device_->texels = ocl::upload(analysis.texels);
-    device_->texel_channels = analysis.texel_channels;
+    // The re-match compares the first 8 channels: one zero-padded short8 per texel.
+    const int C = analysis.texel_channels;
+    const size_t n = analysis.texels.size() / static_cast<size_t>(C);
+    std::vector<int16_t> t8(n * 8, 0);
+    for (size_t i = 0; i < n; ++i)
+      for (int c = 0; c < std::min(C, 8); ++c) t8[i * 8 + c] = analysis.texels[i * C + c];
+    device_->texels = ocl::upload(t8);
+    device_->texel_channels = C;
   }
   for (const auto& lv : analysis.level) {
     Device::Level d;
@@ -550,7 +556,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
           static_cast<cl_int>(a.toroidal ? 1 : 0));
       if (o.refine_passes > 0) phase("seam refinement");
-      run(dev.rematch, rematch, dev.texels, static_cast<cl_int>(dev.texel_channels), lv.coherent,
+      run(dev.rematch, rematch, dev.texels, lv.coherent,
           static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
           static_cast<cl_int>(kRematchCoherence));
     }
