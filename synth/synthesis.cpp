@@ -100,20 +100,19 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   }
   const int tdx[9] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
   const int tdy[9] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
-  int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  // Vector arithmetic (int8 lanes): the same integer sums as channel-by-channel loops.
+  int8 proj = (int8)(0);
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
   for (int t = 0; t < 9; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
-    global const char* a = A + 8 * ((long)c.y * ew + c.x);
-    for (int d = 0; d < 8; ++d) {
-      const int v = a[d];
-      constant int* row = P + (t * 8 + d) * 8;
-      for (int k = 0; k < 8; ++k) proj[k] += v * row[k];
-    }
+    const int8 v = convert_int8(vload8(0, A + 8 * ((long)c.y * ew + c.x)));
+    constant int* row = P + t * 64;
+    proj += v.s0 * vload8(0, row) + v.s1 * vload8(1, row) + v.s2 * vload8(2, row) + v.s3 * vload8(3, row) +
+            v.s4 * vload8(4, row) + v.s5 * vload8(5, row) + v.s6 * vload8(6, row) + v.s7 * vload8(7, row);
   }
-  for (int k = 0; k < 8; ++k) proj[k] >>= 8;
+  proj >>= 8;
 
   int2 best = S[(long)j * w + i];  // kept if every candidate is refused
   int bestd = 0x7fffffff;
@@ -137,9 +136,10 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
           ux = sy_wrap(ux, ew);
           uy = sy_wrap(uy, eh);
         }
-        global const short* f = NE + 8 * ((long)uy * ew + ux);
-        int d = 0;
-        for (int k = 0; k < 8; ++k) { const int e = proj[k] - f[k]; d += e * e; }
+        const int8 e = proj - convert_int8(vload8(0, NE + 8 * ((long)uy * ew + ux)));
+        const int8 e2 = e * e;
+        const int4 e4 = e2.lo + e2.hi;
+        int d = e4.x + e4.y + e4.z + e4.w;
         if (kk == 1) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
         if (d < bestd) { bestd = d; best = (int2)(ux, uy); }
       }
@@ -197,16 +197,15 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
   }
   if (n == 1) return;  // inside a patch: every neighbour continues it
   // The synthesised surroundings: the appearance at S[p + d].
-  char ref[24 * 8];
+  // Vector arithmetic (int8 lanes, summed per row): the same integer sums as per-channel loops.
+  int8 ref[24];
   int t = 0;
   for (int dy = -2; dy <= 2; ++dy) {
     for (int dx = -2; dx <= 2; ++dx) {
       if (dx == 0 && dy == 0) continue;
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
       const int2 c = Sin[(long)nj * w + ni];
-      global const char* a = A + 8 * ((long)c.y * ew + c.x);
-      for (int k = 0; k < 8; ++k) ref[8 * t + k] = a[k];
-      ++t;
+      ref[t++] = convert_int8(vload8(0, A + 8 * ((long)c.y * ew + c.x)));
     }
   }
   int2 best = s0;
@@ -215,14 +214,16 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
     int d = 0;
     t = 0;
     for (int dy = -2; dy <= 2; ++dy) {
+      const int uy = toroidal ? sy_wrap(cand[c].y + dy, eh) : sy_reflect(cand[c].y + dy, eh);
+      int8 acc = (int8)(0);
       for (int dx = -2; dx <= 2; ++dx) {
         if (dx == 0 && dy == 0) continue;
         const int ux = toroidal ? sy_wrap(cand[c].x + dx, ew) : sy_reflect(cand[c].x + dx, ew);
-        const int uy = toroidal ? sy_wrap(cand[c].y + dy, eh) : sy_reflect(cand[c].y + dy, eh);
-        global const char* a = A + 8 * ((long)uy * ew + ux);
-        for (int k = 0; k < 8; ++k) { const int e = (int)ref[8 * t + k] - (int)a[k]; d += e * e; }
-        ++t;
+        const int8 e = ref[t++] - convert_int8(vload8(0, A + 8 * ((long)uy * ew + ux)));
+        acc += e * e;
       }
+      const int4 a4 = acc.lo + acc.hi;
+      d += a4.x + a4.y + a4.z + a4.w;
       if (d >= bestd) break;  // cannot win any more (ties keep the earlier candidate)
     }
     if (d < bestd) { bestd = d; best = cand[c]; }
