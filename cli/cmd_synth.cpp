@@ -30,8 +30,8 @@ struct SynthCliOptions {
   std::string randomness = "1,0";
   std::string passes = "0,2";
   float kappa = 8.0f;
-  int finest_passes = 2;
-  int refine_passes = 1;
+  int finest_passes = synth::SynthOptions{}.finest_passes;
+  int refine_passes = synth::SynthOptions{}.refine_passes;
   int rematch_passes = synth::SynthOptions{}.rematch_passes;
   int layout_shifts = synth::SynthOptions{}.layout_shifts;
   bool tileable = false;
