@@ -222,14 +222,12 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
       if (!flt && !normal) {
         // 8/16-bit codes: the weighted sum is an exact integer, and (2 sum + W) / 2W is
         // lround(sum / W) (the same bytes as the floating-point path, at a fraction of the cost).
-        // Near a join the taps predict only a few distinct texels (one per patch): their weights
-        // are summed first, then each texel is read once.
-        int32_t texel[16];
-        int64_t tweight[16];
-        int distinct = 0;
         int64_t isum[3] = {0, 0, 0}, iweight = 0;
-        auto add = [&](int32_t t, int64_t wk) {
-          const unsigned char* b = &pal.bytes[static_cast<size_t>(t) * tb];
+        for (size_t k = 0; k < pred.size(); ++k) {
+          if (pred[k] < 0) continue;
+          const int64_t wk = sb.weight[k];
+          iweight += wk;
+          const unsigned char* b = &pal.bytes[static_cast<size_t>(pred[k]) * tb];
           if (wide) {
             uint16_t v[3];
             std::memcpy(v, b, 6);
@@ -237,22 +235,7 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
           } else {
             for (int c = 0; c < 3; ++c) isum[c] += wk * b[c];
           }
-        };
-        for (size_t k = 0; k < pred.size(); ++k) {
-          if (pred[k] < 0) continue;
-          const int64_t wk = sb.weight[k];
-          iweight += wk;
-          int m = 0;
-          while (m < distinct && texel[m] != pred[k]) ++m;
-          if (m < distinct) {
-            tweight[m] += wk;
-          } else if (distinct < 16) {
-            texel[distinct] = pred[k], tweight[distinct] = wk, ++distinct;
-          } else {
-            add(pred[k], wk);  // more than 16 distinct texels: summed directly
-          }
         }
-        for (int m = 0; m < distinct; ++m) add(texel[m], tweight[m]);
         for (int c = 0; c < 3; ++c) {
           const int64_t code = (2 * isum[c] + iweight) / (2 * iweight);
           if (wide) {
