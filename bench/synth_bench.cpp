@@ -324,8 +324,8 @@ int main(int argc, char** argv) {
       cop_p.push_back(qp.copied), cop_g.push_back(qg.copied), pie_p.push_back(qp.piece), pie_g.push_back(qg.piece);
       speed_cli.push_back(median(g_cpu) / median(cli_cpu));
       speed_lib.push_back(median(g_cpu) / median(lib_cpu));
-      table += fmt::format("| {} | {:.2f} / {:.2f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.1f}x | {:.1f} / {:.1f} | "
-                           "{:.1f} / {:.1f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
+      table += fmt::format("| {} | {:.2f} / {:.2f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.1f}x | {:.2f} / {:.2f} | "
+                           "{:.2f} / {:.2f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
                            name, median(cli_wall), median(cli_cpu), median(lib_wall), median(lib_cpu), median(g_wall),
                            median(g_cpu), median(g_cpu) / median(cli_cpu), qp.coherence, qg.coherence,
                            qp.completeness, qg.completeness, qp.similarity, qg.similarity, qp.copied, qg.copied,
@@ -341,7 +341,7 @@ int main(int argc, char** argv) {
       labels.push_back("G'MIC");
     }
     table += fmt::format(
-        "| **median** | | | | CLI {:.1f}x, in-process {:.1f}x | {:.1f} / {:.1f} | {:.1f} / {:.1f} | {:.3f} / {:.3f} "
+        "| **median** | | | | CLI {:.1f}x, in-process {:.1f}x | {:.2f} / {:.2f} | {:.2f} / {:.2f} | {:.3f} / {:.3f} "
         "| {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
         median(speed_cli), median(speed_lib), median(coh_p), median(coh_g), median(com_p), median(com_g),
         median(sim_p), median(sim_g), median(cop_p), median(cop_g), median(pie_p), median(pie_g));

@@ -16,6 +16,7 @@
 #include "synth/graph_synthesis.h"
 #include "synth/render.h"
 #include "synth/synthesis.h"
+#include "synth/timing.h"
 
 namespace proctex::cli {
 namespace {
@@ -29,8 +30,8 @@ struct SynthCliOptions {
   std::string randomness = "1,0";
   std::string passes = "0,2";
   float kappa = 8.0f;
-  int finest_passes = 2;
-  int refine_passes = 1;
+  int finest_passes = synth::SynthOptions{}.finest_passes;
+  int refine_passes = synth::SynthOptions{}.refine_passes;
   int rematch_passes = synth::SynthOptions{}.rematch_passes;
   int layout_shifts = synth::SynthOptions{}.layout_shifts;
   bool tileable = false;
@@ -322,14 +323,17 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   }
   check_outputs(outputs, ex);
 
+  timing::mark("start-up, options");
   ex.colour = load_exemplar_image(o.exemplar);
   for (size_t i = 0; i < map_args.size(); ++i) ex.maps[i].image = load_exemplar_image(map_args[i].in);
   validate(ex);
+  timing::mark("exemplar read");
 
   const std::filesystem::path cache = o.no_cache ? std::filesystem::path()
                                       : !o.cache_dir.empty() ? std::filesystem::path(o.cache_dir)
                                                              : default_cache_dir();
   const Analysis analysis = analyse_cached(ex, aopt, cache);
+  timing::mark(analysis.from_cache ? "analysis cache load (+ shifts, texels)" : "analysis (not cached)");
   check_options(analysis, options);
   if (o.tileable && first_level(analysis, options) > 1 && !global.quiet && !o.json) {
     std::fprintf(stderr,

@@ -1,9 +1,11 @@
 #include "synth/synthesis.h"
 #include "synth/plane.h"
+#include "synth/timing.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 
 #include <fmt/format.h>
 
@@ -50,7 +52,9 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
   const long hy = period_y > 0 ? sy_wrapl(qy, period_y) : qy;
   long jx = 0, jy = 0;
   // The jitter map scales r at the finest-level pixel this one covers; it repeats over the plane.
-  const int scaled = (int)(((long)rq * jmap[sy_wrapl(qy << shift, jh) * jw + sy_wrapl(qx << shift, jw)]) / 255);
+  // (jw = 0: no map, 255 everywhere, without the two 64-bit modulos per pixel.)
+  const int scaled =
+      jw == 0 ? rq : (int)(((long)rq * jmap[sy_wrapl(qy << shift, jh) * jw + sy_wrapl(qx << shift, jw)]) / 255);
   if (scaled > 0 && shift_count > 0) {
     // One of the exemplar's most self-similar translations (structure-keeping layout jitter).
     const uint k = sy_hash_pos(hx, hy, level, seed, 2) % (uint)shift_count;
@@ -75,12 +79,9 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
 
 // One correction sub-pass: the pixels whose absolute coordinates have parity (parx, pary). The
 // other classes are read only, so the update in place is race-free and order-independent.
-kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
-                    global const char* A, global const short* NE, global const int* C1,
-                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
-  const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
-  const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
-  if (i >= w || j >= h) return;
+void sy_correct_px(global int2* S, int i, int j, int w, int h,
+                   global const char* A, global const short* NE, global const int* C1,
+                   constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
   // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
   // keep it. Only the pixels on a join between patches are matched; at the finer levels, where
@@ -102,20 +103,19 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   }
   const int tdx[9] = {0, -1, 1, -1, 1, 0, -1, 1, 0};
   const int tdy[9] = {0, -1, -1, 1, 1, -1, 0, 0, 1};
-  int proj[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  // Vector arithmetic (int8 lanes): the same integer sums as channel-by-channel loops.
+  int8 proj = (int8)(0);
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
   for (int t = 0; t < 9; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
-    global const char* a = A + 8 * ((long)c.y * ew + c.x);
-    for (int d = 0; d < 8; ++d) {
-      const int v = a[d];
-      constant int* row = P + (t * 8 + d) * 8;
-      for (int k = 0; k < 8; ++k) proj[k] += v * row[k];
-    }
+    const int8 v = convert_int8(vload8(0, A + 8 * ((long)c.y * ew + c.x)));
+    constant int* row = P + t * 64;
+    proj += v.s0 * vload8(0, row) + v.s1 * vload8(1, row) + v.s2 * vload8(2, row) + v.s3 * vload8(3, row) +
+            v.s4 * vload8(4, row) + v.s5 * vload8(5, row) + v.s6 * vload8(6, row) + v.s7 * vload8(7, row);
   }
-  for (int k = 0; k < 8; ++k) proj[k] >>= 8;
+  proj >>= 8;
 
   int2 best = S[(long)j * w + i];  // kept if every candidate is refused
   int bestd = 0x7fffffff;
@@ -139,9 +139,10 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
           ux = sy_wrap(ux, ew);
           uy = sy_wrap(uy, eh);
         }
-        global const short* f = NE + 8 * ((long)uy * ew + ux);
-        int d = 0;
-        for (int k = 0; k < 8; ++k) { const int e = proj[k] - f[k]; d += e * e; }
+        const int8 e = proj - convert_int8(vload8(0, NE + 8 * ((long)uy * ew + ux)));
+        const int8 e2 = e * e;
+        const int4 e4 = e2.lo + e2.hi;
+        int d = e4.x + e4.y + e4.z + e4.w;
         if (kk == 1) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
         if (d < bestd) { bestd = d; best = (int2)(ux, uy); }
       }
@@ -149,20 +150,34 @@ kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx,
   }
   S[(long)j * w + i] = best;
 }
+kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+                       global const char* A, global const short* NE, global const int* C1,
+                       constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
+  const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
+  const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
+  if (i >= w || j >= h) return;
+  sy_correct_px(S, i, j, w, h, A, NE, C1, P, spacing, ew, eh, toroidal, kappa);
+}
+// Sub-passes of the refinement and the re-match: the two colours of the checkerboard of the ABSOLUTE
+// coordinates (so windows agree; a tileable period is even, so the colouring is periodic too). A
+// sub-pass reads the previous state (Sin) and writes every pixel to S (ping-pong buffers), so it is
+// race-free although a pixel reads up to 3 px around; a pass (2 sub-passes) reaches 2x the read
+// radius, which bounds the window padding. Adjacent pixels are never decided together (the cause
+// of the all-at-once update's worse joins); the 3x3 / 4x4 in-place classes used before reached 9
+// and 16 times the radius (18 and 48 px of padding) for 0.00-0.05 better bench coherence.
+int sy_in_class(long x, long y, int parity) { return parity < 0 || (int)((x + y) & 1) == parity; }
 // Seam refinement at the finest level: a pixel on a join between patches takes the coherent
 // candidate of one of its 8 neighbours (u = S[p + e] - e) whose wider surroundings match best: the
 // appearance vectors at the 24 taps p + d, 0 < max(|dx|, |dy|) <= 2, compared with those at u + d
 // (each appearance vector already describes a 5x5 neighbourhood, so the footprint is 9x9). The
-// pixel's current position competes as well and wins ties. Sub-passes are the 3x3 classes of the
-// absolute coordinates (a pixel reads up to 2 pixels away, so one class never reads itself), and
-// S_in = S_out. A tileable plane's period need not be a multiple of 3, so there (parx < 0) every
-// pixel is updated at once from a copy of the previous state (S_in), which keeps the output periodic.
-kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
+// pixel's current position competes as well and wins ties. Two sub-passes (checkerboard, above).
+kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
                       global const char* A, int ew, int eh, int toroidal) {
-  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 3) + 3 * get_global_id(0);
-  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 3) + 3 * get_global_id(1);
+  const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const int2 s0 = Sin[(long)j * w + i];
+  S[(long)j * w + i] = s0;
+  if (!sy_in_class(ox + i, oy + j, parity)) return;
   int2 cand[9];
   int n = 0;
   cand[n++] = s0;
@@ -185,16 +200,15 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
   }
   if (n == 1) return;  // inside a patch: every neighbour continues it
   // The synthesised surroundings: the appearance at S[p + d].
-  char ref[24 * 8];
+  // Vector arithmetic (int8 lanes, summed per row): the same integer sums as per-channel loops.
+  int8 ref[24];
   int t = 0;
   for (int dy = -2; dy <= 2; ++dy) {
     for (int dx = -2; dx <= 2; ++dx) {
       if (dx == 0 && dy == 0) continue;
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
       const int2 c = Sin[(long)nj * w + ni];
-      global const char* a = A + 8 * ((long)c.y * ew + c.x);
-      for (int k = 0; k < 8; ++k) ref[8 * t + k] = a[k];
-      ++t;
+      ref[t++] = convert_int8(vload8(0, A + 8 * ((long)c.y * ew + c.x)));
     }
   }
   int2 best = s0;
@@ -203,14 +217,16 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
     int d = 0;
     t = 0;
     for (int dy = -2; dy <= 2; ++dy) {
+      const int uy = toroidal ? sy_wrap(cand[c].y + dy, eh) : sy_reflect(cand[c].y + dy, eh);
+      int8 acc = (int8)(0);
       for (int dx = -2; dx <= 2; ++dx) {
         if (dx == 0 && dy == 0) continue;
         const int ux = toroidal ? sy_wrap(cand[c].x + dx, ew) : sy_reflect(cand[c].x + dx, ew);
-        const int uy = toroidal ? sy_wrap(cand[c].y + dy, eh) : sy_reflect(cand[c].y + dy, eh);
-        global const char* a = A + 8 * ((long)uy * ew + ux);
-        for (int k = 0; k < 8; ++k) { const int e = (int)ref[8 * t + k] - (int)a[k]; d += e * e; }
-        ++t;
+        const int8 e = ref[t++] - convert_int8(vload8(0, A + 8 * ((long)uy * ew + ux)));
+        acc += e * e;
       }
+      const int4 a4 = acc.lo + acc.hi;
+      d += a4.x + a4.y + a4.z + a4.w;
       if (d >= bestd) break;  // cannot win any more (ties keep the earlier candidate)
     }
     if (d < bestd) { bestd = d; best = cand[c]; }
@@ -220,17 +236,19 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 // Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
 // ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
 // of the 3x3 (C1[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
-// around p (48 taps, the centre excluded; the first 8 channels, quantised). Sub-passes are the 4x4
-// classes of the absolute coordinates (a pixel reads 3 px around); a tileable plane updates every
-// pixel at once from a copy (parx < 0), as sy_refine.
-#define SY_RM_CH 8
+// around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
+// (checkerboard, above).
 int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
-kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parx, int pary,
-                       global const short* T, int C, global const int* C1, int ew, int eh, int toroidal) {
-  const int i = parx < 0 ? (int)get_global_id(0) : (int)sy_wrapl(parx - ox, 4) + 4 * get_global_id(0);
-  const int j = parx < 0 ? (int)get_global_id(1) : (int)sy_wrapl(pary - oy, 4) + 4 * get_global_id(1);
+// T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
+// multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
+// as the channel-by-channel loop).
+kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
+                       global const short8* T, global const int* C1, int ew, int eh, int toroidal, int kmode) {
+  const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const int2 s0 = Sin[(long)j * w + i];
+  S[(long)j * w + i] = s0;
+  if (!sy_in_class(ox + i, oy + j, parity)) return;
   // Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep.
   int inside = 1;
   for (int e = 0; e < 9 && inside; ++e) {
@@ -250,6 +268,7 @@ kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, lon
     const int2 c = Sin[(long)nj * w + ni];
     for (int kk = 0; kk < 2; ++kk) {
       if (kk == 0 && ex == 0 && ey == 0) continue;
+      if (kk == 1 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue;
       int ux = c.x, uy = c.y;
       if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
       ux -= ni - i;
@@ -267,17 +286,14 @@ kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, lon
   }
   if (n == 1) return;
   // The texels the synthesis has around p.
-  const int ch = min(C, SY_RM_CH);
-  short ref[48 * SY_RM_CH];
+  int8 ref[48];
   int t = 0;
   for (int dy = -3; dy <= 3; ++dy) {
     const int nj = clamp(j + dy, 0, h - 1);
     for (int dx = -3; dx <= 3; ++dx) {
       if (dx == 0 && dy == 0) continue;
       const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)];
-      global const short* src = T + ((long)q.y * ew + q.x) * C;
-      for (int c = 0; c < ch; ++c) ref[t * SY_RM_CH + c] = src[c];
-      ++t;
+      ref[t++] = convert_int8(T[(long)q.y * ew + q.x]);
     }
   }
   int2 best = s0;
@@ -290,16 +306,17 @@ kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, lon
     t = 0;
     for (int dy = -3; dy <= 3 && d < bestd; ++dy) {
       const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh);
+      global const short8* row = T + (long)uy * ew;
+      int8 acc = (int8)(0);
       for (int dx = -3; dx <= 3; ++dx) {
         if (dx == 0 && dy == 0) continue;
         const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew);
-        global const short* src = T + ((long)uy * ew + ux) * C;
-        for (int c = 0; c < ch; ++c) {
-          const int e = (int)ref[t * SY_RM_CH + c] - (int)src[c];
-          d += e * e;
-        }
-        ++t;
+        const int8 e = ref[t++] - convert_int8(row[ux]);
+        acc += e * e;
       }
+      const int4 a4 = acc.lo + acc.hi;
+      const int2 a2 = a4.lo + a4.hi;
+      d += a2.x + a2.y;
     }
     if (d < bestd) { bestd = d; best = cand[k]; }
   }
@@ -319,6 +336,9 @@ int ctz64(int64_t v) {
 }
 
 using detail::kMaxCoordinate;
+
+// Which k-coherence candidates the re-match tries: 0 none, 1 the pixel's own, 2 those of the 3x3.
+constexpr int kRematchCoherence = 2;
 
 template <typename... Args>
 void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
@@ -398,6 +418,7 @@ int passes_at(const Analysis& a, const SynthOptions& o, int level) {
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
   auto& rt = ocl::Runtime::instance();
+  timing::mark("OpenCL platform, context, queue");
   device_->program = rt.program(kSource, "-cl-std=CL1.2");
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
@@ -406,9 +427,16 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     return 0;
   });
+  timing::mark("program build / binary cache load");
   if (!analysis.texels.empty()) {
-    device_->texels = ocl::upload(analysis.texels);
-    device_->texel_channels = analysis.texel_channels;
+    // The re-match compares the first 8 channels: one zero-padded short8 per texel.
+    const int C = analysis.texel_channels;
+    const size_t n = analysis.texels.size() / static_cast<size_t>(C);
+    std::vector<int16_t> t8(n * 8, 0);
+    for (size_t i = 0; i < n; ++i)
+      for (int c = 0; c < std::min(C, 8); ++c) t8[i * 8 + c] = analysis.texels[i * C + c];
+    device_->texels = ocl::upload(t8);
+    device_->texel_channels = C;
   }
   for (const auto& lv : analysis.level) {
     Device::Level d;
@@ -418,6 +446,7 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     d.projection = ocl::upload(lv.projection);
     device_->levels.push_back(std::move(d));
   }
+  timing::mark("analysis upload to the device");
 }
 
 Synthesizer::~Synthesizer() = default;
@@ -432,12 +461,10 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   const int L = a.levels;
   const int l0 = first_level(a, o);
   // The reach of level l's correction: each sub-pass reads one pixel around, 4 per pass.
-  // At the finest level the seam refinement's 9 sub-passes read 2 pixels around each, the re-match's
-  // 16 sub-passes 3 pixels.
+  // At the finest level the seam refinement's 2 sub-passes read 2 pixels around each, the re-match's
+  // 2 sub-passes 3 pixels.
   const int rematch = a.texels.empty() ? 0 : o.rematch_passes;
-  auto pad_at = [&](int l) {
-    return 4 * passes_at(a, o, l) + 2 + (l == L ? 18 * o.refine_passes + 48 * rematch : 0);
-  };
+  auto pad_at = [&](int l) { return 4 * passes_at(a, o, l) + 2 + (l == L ? 4 * o.refine_passes + 6 * rematch : 0); };
   const int pad = pad_at(L);
   // Regions, finest first: E_L = window + pad_L; E_{l-1} = parents(E_l) + pad_{l-1}.
   std::vector<Region> region(L + 1);
@@ -454,7 +481,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   auto& dev = *device_;
   // Spatially varying randomness: 0..255 per pixel of a map that tiles the plane (255 = r_l).
   const bool has_map = !o.jitter_map.empty();
-  const int jw = has_map ? o.jitter_map_width : 1, jh = has_map ? o.jitter_map_height : 1;
+  const int jw = has_map ? o.jitter_map_width : 0, jh = has_map ? o.jitter_map_height : 1;
   const std::vector<uint8_t> full{255};
   cl::Buffer jmap = ocl::upload(has_map ? o.jitter_map : full);
   cl::Buffer parent = ocl::output_buffer(sizeof(cl_int2));
@@ -498,8 +525,15 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
                 static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
                 static_cast<cl_int>(o.pastes.size()), shift_buffer, static_cast<cl_int>(shift_count));
+    auto phase = [&](const char* what) {
+      if (!timing::enabled()) return;
+      ocl::finish();
+      timing::mark(fmt::format("level {} {} ({}x{})", l, what, r.w, r.h));
+    };
+    phase("upsample + jitter");
     const auto& lv = dev.levels[l];
-    for (int pass = 0; pass < passes_at(a, o, l); ++pass) {
+    const int level_passes = passes_at(a, o, l);
+    for (int pass = 0; pass < level_passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
@@ -510,58 +544,27 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                     static_cast<cl_int>(std::lround(o.kappa * 256)));
       }
     }
-    if (l == L && o.refine_passes > 0) {
-      const bool periodic = o.period_x > 0;
-      cl::Buffer previous;
-      if (periodic) {
-        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
-          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
-        });
-      }
-      for (int pass = 0; pass < o.refine_passes; ++pass) {
-        if (periodic) {
-          ocl::with_cl_errors("copying a synthesis level", [&] {
-            return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
-          });
-          launch2d(dev.refine, r.w, r.h, previous, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), cl_int(-1), cl_int(-1), lv.appearance,
-                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
-                   static_cast<cl_int>(a.toroidal ? 1 : 0));
-          continue;
+    if (passes_at(a, o, l) > 0) phase("correction");
+    if (l == L && (o.refine_passes > 0 || rematch > 0)) {
+      // Ping-pong between S and a second buffer: each sub-pass reads the previous state.
+      cl::Buffer other = ocl::with_cl_errors("allocating synthesis level", [&] {
+        return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
+      });
+      auto run = [&](cl::Kernel& kernel, int passes, auto&&... rest) {
+        for (int sub = 0; sub < 2 * passes; ++sub) {
+          launch2d(kernel, r.w, r.h, S, other, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1), rest...);
+          std::swap(S, other);
         }
-        for (int sub = 0; sub < 9; ++sub) {
-          launch2d(dev.refine, (r.w + 2) / 3, (r.h + 2) / 3, S, S, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub % 3),
-                   static_cast<cl_int>(sub / 3), lv.appearance, static_cast<cl_int>(a.width),
-                   static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
-        }
-      }
+      };
+      run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
+          static_cast<cl_int>(a.toroidal ? 1 : 0));
+      if (o.refine_passes > 0) phase("seam refinement");
+      run(dev.rematch, rematch, dev.texels, lv.coherent,
+          static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
+          static_cast<cl_int>(kRematchCoherence));
     }
-    if (l == L && rematch > 0) {
-      const bool periodic = o.period_x > 0;
-      cl::Buffer previous;
-      if (periodic) {
-        previous = ocl::with_cl_errors("allocating synthesis level", [&] {
-          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count * sizeof(cl_int2));
-        });
-      }
-      for (int pass = 0; pass < rematch; ++pass) {
-        const int subs = periodic ? 1 : 16;
-        for (int sub = 0; sub < subs; ++sub) {
-          if (periodic) {
-            ocl::with_cl_errors("copying a synthesis level", [&] {
-              return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, previous, 0, 0, count * sizeof(cl_int2));
-            });
-          }
-          const int gx = periodic ? r.w : (r.w + 3) / 4, gy = periodic ? r.h : (r.h + 3) / 4;
-          launch2d(dev.rematch, gx, gy, periodic ? previous : S, S, static_cast<cl_int>(r.w),
-                   static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
-                   static_cast<cl_int>(periodic ? -1 : sub % 4), static_cast<cl_int>(periodic ? -1 : sub / 4),
-                   dev.texels, static_cast<cl_int>(dev.texel_channels), lv.coherent, static_cast<cl_int>(a.width),
-                   static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
-        }
-      }
-    }
+    if (l == L && rematch > 0) phase("re-match");
     parent = S;
     parent_region = r;
     parent_zero = false;
@@ -569,11 +572,15 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   // Read back the window's rows.
   std::vector<int32_t> out(static_cast<size_t>(win.width) * win.height * 2);
   const Region& r = region[L];
-  for (int y = 0; y < win.height; ++y) {
-    ocl::download_async(parent, static_cast<size_t>(y + pad) * r.w + pad, static_cast<size_t>(win.width),
-                        reinterpret_cast<cl_int2*>(out.data()) + static_cast<size_t>(y) * win.width);
-  }
+  // One read of the window's rows (full padded width), then the columns are cut on the host: a
+  // read per row cost ~8 us each.
+  std::vector<cl_int2> rows(static_cast<size_t>(win.height) * r.w);
+  ocl::download_async(parent, static_cast<size_t>(pad) * r.w, rows.size(), rows.data());
   ocl::finish();
+  for (int y = 0; y < win.height; ++y)
+    std::memcpy(reinterpret_cast<cl_int2*>(out.data()) + static_cast<size_t>(y) * win.width,
+                rows.data() + static_cast<size_t>(y) * r.w + pad, sizeof(cl_int2) * win.width);
+  timing::mark("readback");
   return out;
 }
 

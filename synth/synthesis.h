@@ -37,21 +37,22 @@ struct SynthOptions {
   // visible lattice), 2 below.
   std::vector<int> passes = {0, 2};
   // Passes at the finest level (the most pixels), overriding `passes` there; -1 = as `passes`.
-  // 2: since the correction skips the pixels inside a patch, a second pass costs little and lowered
-  // the coherence measure on 3 of the 10 bench exemplars (docs/synth.md).
-  int finest_passes = 2;
-  // Seam refinement passes at the finest level (each 9 sub-passes): pixels on a join take the
-  // neighbour's patch whose 9x9 surroundings match best, moving joins to where the patches agree.
-  // 1: median coherence 5.5 -> 5.4 on the bench, no exemplar worse (3 passes: the same median at
-  // 3x the cost; docs/synth.md).
-  int refine_passes = 1;
-  // Final re-match passes at the finest level (each 16 sub-passes), after the seam refinement: a
-  // pixel on a join takes, among its own position, the coherent candidates of its 8 neighbours
-  // (S[p + e] - e) and their k-coherence candidates, the one whose 7x7 texels (the bench's patch
-  // footprint, colour and maps, not appearance vectors) match the synthesised 7x7 surroundings best.
-  // 1: coherence -0.1..-0.2 on brick, grass, pave and rock of the bench (with or without layout
-  // shifts; the median reaches G'MIC's 5.1 with it); costs ~+4 s CPU at 4096^2 (docs/synth.md).
-  int rematch_passes = 1;
+  // 1 (issue 13, fourth pass): with two re-match passes after it, a second correction pass changed
+  // no bench measure by more than 0.02 and cost ~12 ms CPU of a 512^2 run (docs/synth.md).
+  int finest_passes = 1;
+  // Seam refinement passes at the finest level (each 2 checkerboard sub-passes): pixels on a join
+  // take the neighbour's patch whose 9x9 surroundings (appearance vectors) match best, moving joins
+  // to where the patches agree. 0 by default since the fourth pass: two re-match passes without it
+  // give the bench coherence of the old defaults (refinement + one re-match in 3x3 / 4x4 classes);
+  // with it they are 0.00-0.03 better at +18 ms CPU per 512^2 (docs/synth.md).
+  int refine_passes = 0;
+  // Final re-match passes at the finest level (each 2 checkerboard sub-passes), after the seam
+  // refinement: a pixel on a join takes, among its own position, the coherent candidates of its 8
+  // neighbours (S[p + e] - e) and their k-coherence candidates, the one whose 7x7 texels (the
+  // bench's patch footprint, colour and maps, not appearance vectors) match the synthesised 7x7
+  // surroundings best. 2: brick/grass/pave/rock coherence 4.01 / 5.14 / 6.82 / 5.53 against
+  // 4.00 / 5.15 / 6.82 / 5.52 for the old defaults; one pass: 4.03 / 5.15 / 6.86 / 5.57.
+  int rematch_passes = 2;
   // Layout jitter restricted to structure-keeping shifts: at the first synthesised level a pixel
   // (a block of h_l x h_l output pixels) is shifted by one of the exemplar's `layout_shifts` most
   // self-similar translations (Analysis::shifts; drawn by the same position hash) instead of by a

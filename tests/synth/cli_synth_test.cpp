@@ -73,9 +73,11 @@ TEST(SynthCli, WritesTheOutputAndReportsJson) {
   EXPECT_EQ(out.height, 120);
   EXPECT_NE(r.out.find("\"seed\": 9"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"analysis_cached\": false"), std::string::npos) << r.out;
-  // The options that shape the result are recorded (the defaults of issue 13's third pass).
+  // The options that shape the result are recorded (the defaults of issue 13's fourth pass).
   EXPECT_NE(r.out.find("\"layout_shifts\": 32"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("\"rematch\": 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"rematch\": 2"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"refine_seams\": 0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"finest_passes\": 1"), std::string::npos) << r.out;
   // The second run finds the analysis in the cache.
   const auto again = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "out2.png").string() +
                                      "' --size 200x120 --seed 9 --json",

@@ -288,7 +288,7 @@ double coherence(const std::vector<int32_t>& S, int w, int h, int ew, int column
 }
 
 TEST(Synth, SeamRefinementKeepsWindowsExactAndPatchesWhole) {
-  // The refinement's 9 sub-passes read 2 pixels around: a window must still equal the same region
+  // The refinement's 2 checkerboard sub-passes read 2 pixels around: a window must still equal the same region
   // of a larger synthesis (also a single pixel), on a toroidal and on a bounded exemplar.
   for (const bool torus : {true, false}) {
     Synthesizer s(torus ? periodic_analysis() : photo_analysis());
@@ -353,7 +353,7 @@ double patch_coherence(const Image& out, const Image& ex) {
 }
 
 TEST(Synth, FinalRematchKeepsWindowsExactAndPatchesWhole) {
-  // The re-match's 16 sub-passes read 3 pixels around: windows stay exact (toroidal and bounded
+  // The re-match's 2 checkerboard sub-passes read 3 pixels around: windows stay exact (toroidal and bounded
   // exemplars, a single pixel) and the thread count does not matter (covered by the determinism test).
   for (const bool torus : {true, false}) {
     Synthesizer s(torus ? periodic_analysis() : photo_analysis());
@@ -379,15 +379,16 @@ TEST(Synth, FinalRematchKeepsWindowsExactAndPatchesWhole) {
     o.seed = seed;
     o.rematch_passes = 0;
     const auto before = s.synthesise(w, o);
-    o.rematch_passes = 1;
+    o.rematch_passes = SynthOptions{}.rematch_passes;
     const auto after = s.synthesise(w, o);
     const double b = patch_coherence(colours_of(before, w.width, w.height, ex), ex);
     const double a = patch_coherence(colours_of(after, w.width, w.height, ex), ex);
     without += b;
     with += a;
     // It may take a k-coherence candidate (a new join) where that fits better, but patches stay
-    // whole: the share of adjacent pixels continuing a patch falls by at most 0.03 (0.02 at worst seen).
-    EXPECT_GE(coherence(after, w.width, w.height, 64), coherence(before, w.width, w.height, 64) - 0.03) << seed;
+    // whole: the share of adjacent pixels continuing a patch (~0.95 before) falls by at most 0.045
+    // with the default 2 passes (0.028-0.036 seen; 0.02 with one pass after a seam refinement).
+    EXPECT_GE(coherence(after, w.width, w.height, 64), coherence(before, w.width, w.height, 64) - 0.045) << seed;
   }
   // On this small, noisy photo the re-match moves the measure by less than 1% either way (on the
   // bench's 128 px exemplars it lowered it; docs/synth.md): it must at least not damage the output.
