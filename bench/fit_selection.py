@@ -400,7 +400,8 @@ def load_header(path, data):
 def rescore_matches(data, model, folder, weights=(0, 0.25, 0.5, 1, 1.5, 2, 3)):
     """The final choice of bench_match_eval --pictures JSONs (split "match" rows), re-scored with this
     model's P: among each target's finalists (refined and polished similarity S) the one maximising
-    log S + share w log P (share 0.25 on clean patterns, as search/match.cpp). The finalists were
+    log S + share w log P (share 0.25 on clean patterns, where S >= 0.75 wins outright, as
+    search/match.cpp). The finalists were
     chosen with the model of the run, so this is an estimate."""
     rows = [i for i, p in enumerate(data.photos) if p["split"] == "match"]
     out = {}
@@ -420,7 +421,9 @@ def rescore_matches(data, model, folder, weights=(0, 0.25, 0.5, 1, 1.5, 2, 3)):
             if not cands:
                 continue
             k = {n: j for j, n in enumerate(data.names)}
-            best = max(cands, key=lambda c: (np.log(max(c[1], 1e-9)) + share * w * np.log(max(P[k[c[0]]], 1e-9))))
+            # as search/match.cpp: on a clean pattern S >= 0.75 (kCertainMatch) wins outright
+            best = max(cands, key=lambda c: 1e6 + c[1] if share < 1 and c[1] >= 0.75 else
+                       np.log(max(c[1], 1e-9)) + share * w * np.log(max(P[k[c[0]]], 1e-9)))
             target = r["target"]["spec"]["shader"]
             ident += best[0] == target
             repro += best[0] == target or best[1] >= 0.95 * r["target"]["ceiling"]
