@@ -335,18 +335,20 @@ def reliability(data, pairs, edges=(0, 0.2, 0.4, 0.6, 0.8, 0.9, 1.0001)):
     return out
 
 
-def fit_temperature(data, pairs, fit_alpha=True):
+def fit_temperature(data, pairs, fit_alpha=True, weights=None):
     """Temperatures (structural, colour) and alpha minimising the out-of-fold NLL of `pairs`:
     scores = s / Ts + c / Tc + alpha n. Coordinate search on a log grid, refined 4 times."""
     parts = [data.parts(m, i) for m, i in pairs]
     S = np.array([p[0] for p in parts]); C = np.array([p[1] for p in parts]); N = np.array([p[2] for p in parts])
     A = np.array([data.A[i] for _, i in pairs])
+    w = np.ones(len(pairs)) if weights is None else np.asarray(weights, dtype=float)
+    w = w / w.sum()
 
     def loss(ks, kc, a):
         L = ks * S + kc * C + a * N
         L = L - L.max(axis=1, keepdims=True)
         E = np.exp(L)
-        return float(np.mean(np.log(E.sum(axis=1)) - np.log((E * A).sum(axis=1) + 1e-300)))
+        return float(np.sum(w * (np.log(E.sum(axis=1)) - np.log((E * A).sum(axis=1) + 1e-300))))
 
     x = [1.0 / data.temperature[0], 1.0 / data.temperature[1], data.alpha]
     step = [0.5, 0.5, 1.0]
@@ -509,6 +511,8 @@ def main():
     ap.add_argument("--calibrate", action="store_true",
                     help="fit the temperatures (structural, colour) and alpha on the out-of-fold NLL of the tune "
                          "photos and their grey copies, written to the header")
+    ap.add_argument("--calibrate-synthetic", action="store_true",
+                    help="calibrate on the synthetic renders too (half the weight; their colours are random)")
     ap.add_argument("--folds", type=int, default=5, help="grouped out-of-fold folds")
     ap.add_argument("--no-precondition", action="store_true", help="plain gradient descent (before session 7; unstable)")
     ap.add_argument("--ungrouped", action="store_true", help="the old 2 ungrouped folds (comparison only)")
@@ -592,9 +596,15 @@ def main():
     summary("uncalibrated")
     if args.calibrate:
         pairs = pairs_of(data, folds) + pairs_of(data, folds, grey=True)
-        ts, tc, a, loss = fit_temperature(data, pairs)
+        weights = [1.0] * len(pairs)
+        if args.calibrate_synthetic and synthetic:
+            # the renders of another catalogue (the full model: they are held out from it) weigh as
+            # much in total as the out-of-fold photos: the matcher sees both kinds of target
+            weights += [len(pairs) / len(synthetic)] * len(synthetic)
+            pairs = pairs + [(model, i) for i in synthetic]
+        ts, tc, a, loss = fit_temperature(data, pairs, weights=weights)
         data.temperature, data.alpha = (ts, tc), a
-        print("calibrated on %d out-of-fold rows: structural temperature %.3f, colour temperature %.3f, alpha %.3f, NLL %.3f"
+        print("calibrated on %d rows: structural temperature %.3f, colour temperature %.3f, alpha %.3f, NLL %.3f"
               % (len(pairs), ts, tc, a, loss))
         summary("calibrated")
     t1, t3 = score(data, model, tune)

@@ -8,7 +8,8 @@
 // DIR/structural.f32: float32, [photo][shader]: the best structural similarity of the shader's
 // samples to the whole photo (what match's structural scan computes);
 // DIR/colour.f32: float32, [photo][search::kColourStatistics]: the photo's colour statistics
-// (search::colour_statistics; NaN for the --synthetic rows, which have no image).
+// (search::colour_statistics; for the --synthetic rows, of the sample rendered again at 256 px with
+// its seed: catalogue samples have random colours, and the colour term must be measured on them too).
 // --augment N: N photo-like renders of every catalogue sample (another zoom, a lighting gradient,
 // blur, sensor noise; seeded by --augment-seed), their features in DIR/augmented.f32
 // [render][feature] and their shader indices in evidence.json "augmented": training rows for
@@ -192,12 +193,17 @@ int main(int argc, char** argv) {
     // one view each (their stored features), split "synthetic".
     if (!synthetic.empty()) {
       catalog::Store other(synthetic, catalog::Store::Access::Read);
+      const auto& library = ShaderLibrary::builtin();
+      Renderer renderer(library);
       for (const auto& s : other.shaders()) {
         const auto cat2 = other.load(s.name, false);
+        const ShaderDecl& decl = library.get(s.name);
         for (size_t k = 0; k < cat2.samples.size(); ++k) {
           const auto& f = cat2.samples[k].features;
           write_structural(f);
-          write_colour(std::vector<double>(search::kColourStatistics, std::nan("")));
+          // the sample rendered again (its random colours), for the colour term a target like it gets
+          write_colour(search::colour_statistics(
+              renderer.render_batch(decl, {cat2.samples[k].packed}, {cat2.samples[k].seed}, RenderSettings{}).front()));
           write_target(f);
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
