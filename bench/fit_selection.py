@@ -37,6 +37,17 @@ nexuiz's bark and bark2 one group, etr's rock01/06/07 one group. Groups are deal
 largest first, each to the fold with the fewest photos (deterministic). --ungrouped gives the old
 2 folds (alternate photos by kind), for comparison only.
 
+Greyscale copies (bench_select_dump --grey, --grey-weight W): every photo also as its greyscale copy
+(the structural features are computed from luminance, so the copy differs only by having no colour
+term), trained on with weight W per copy and scored out of fold separately: the structural term
+must stand alone for greyscale photos.
+
+Calibration (--calibrate): temperatures of the structural and the colour logits and alpha, fitted
+on the out-of-fold NLL (-log sum_{accepted} P) of the tune photos and their grey copies
+(--calibrate-synthetic: and the renders of another catalogue, half the weight); written to the
+header as kStructuralTemperature / kColourTemperature (search/selection.cpp divides by them).
+--match-json DIR re-scores the final choice of bench_match_eval runs (see rescore_matches).
+
 Calibration of "good" (search/match.h): p_good is the smallest probability such that at least
 --precision of the out-of-fold top-1 choices with P >= p_good are right.
 """
