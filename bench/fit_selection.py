@@ -37,6 +37,17 @@ nexuiz's bark and bark2 one group, etr's rock01/06/07 one group. Groups are deal
 largest first, each to the fold with the fewest photos (deterministic). --ungrouped gives the old
 2 folds (alternate photos by kind), for comparison only.
 
+Greyscale copies (bench_select_dump --grey, --grey-weight W): every photo also as its greyscale copy
+(the structural features are computed from luminance, so the copy differs only by having no colour
+term), trained on with weight W per copy and scored out of fold separately: the structural term
+must stand alone for greyscale photos.
+
+Calibration (--calibrate): temperatures of the structural and the colour logits and alpha, fitted
+on the out-of-fold NLL (-log sum_{accepted} P) of the tune photos and their grey copies
+(--calibrate-synthetic: and the renders of another catalogue, half the weight); written to the
+header as kStructuralTemperature / kColourTemperature (search/selection.cpp divides by them).
+--match-json DIR re-scores the final choice of bench_match_eval runs (see rescore_matches).
+
 Calibration of "good" (search/match.h): p_good is the smallest probability such that at least
 --precision of the out-of-fold top-1 choices with P >= p_good are right.
 """
@@ -105,6 +116,11 @@ class Data:
             self.y = np.concatenate([self.y, np.array(index["augmented"])])
             print("training rows: %d catalogue samples + %d augmented renders" % (len(X), len(XA)))
         self.photos = index["photos"]
+        # bench_select_dump --grey: a greyscale copy after each photo ("grey", "source": its photo's row)
+        self.grey = np.array([bool(p.get("grey", False)) for p in self.photos])
+        self.grey_of = {p["source"]: i for i, p in enumerate(self.photos) if p.get("grey")}
+        self.grey_weight = 0.0  # --grey-weight: the grey copies of the training photos as training rows
+        self.temperature = (1.0, 1.0)  # structural, colour: logits divided by these (calibration)
         self.views = []
         at = 0
         for p in self.photos:
@@ -116,13 +132,15 @@ class Data:
         C = index.get("colour_size", 0)
         self.C = (np.fromfile(os.path.join(folder, "colour.f32"), dtype="<f4").reshape(len(self.photos), C)
                   .astype(np.float64) if C else np.zeros((len(self.photos), 0)))
-        tune = [i for i, p in enumerate(self.photos) if p["split"] == "tune"]
+        tune = [i for i, p in enumerate(self.photos) if p["split"] == "tune" and not p.get("grey")]
         self.cmean = self.C[tune].mean(axis=0) if C else np.zeros(0)
         self.cscale = (self.C[tune].std(axis=0) + 1e-6) if C else np.zeros(0)
         self.CZ = np.nan_to_num((self.C - self.cmean) / np.where(self.cscale > 0, self.cscale, 1), nan=0.0)
         # Greyscale photos (mean chroma [6] below search::kGreyscaleChroma = 0.5) get no colour term.
+        self.has_colour = np.zeros(len(self.photos), dtype=bool)
         if C:
-            self.CZ[np.nan_to_num(self.C[:, 6], nan=0.0) < GREYSCALE_CHROMA] = 0.0
+            self.has_colour = np.nan_to_num(self.C[:, 6], nan=0.0) >= GREYSCALE_CHROMA
+            self.CZ[~self.has_colour] = 0.0
         self.colour = False
         self.colour_l2 = 0.05
         self.precondition = True
@@ -135,7 +153,7 @@ class Data:
                     self.A[i, self.names.index(s)] = 1
 
     def ids(self, split):
-        return sorted([i for i, p in enumerate(self.photos) if p["split"] == split],
+        return sorted([i for i, p in enumerate(self.photos) if p["split"] == split and not p.get("grey")],
                       key=lambda i: (self.photos[i]["kind"], self.photos[i]["path"]))
 
     def train(self, photo_ids, l2, photo_weight, iterations=600, rate=0.5):
@@ -146,6 +164,8 @@ class Data:
         # Without it the largest eigenvalue (82) makes the step of 0.5 unstable in the top
         # directions (it needs < 2 / (0.5 * 82)): the weights oscillate, and the same fit in float32
         # and float64 gave grouped out-of-fold top-1 0.32 and 0.21 (session 7).
+        if self.grey_weight > 0:
+            photo_ids = list(photo_ids) + [self.grey_of[i] for i in photo_ids if i in self.grey_of]
         M = self.whitening().astype(np.float32) if self.precondition else np.eye(self.Z.shape[1], dtype=np.float32)
         # float32 arithmetic (twice as fast as float64; the weights are written as float anyway)
         Z = self.Z.astype(np.float32) @ M
@@ -167,6 +187,11 @@ class Data:
             for i in photo_ids:
                 count[self.photos[i]["kind"]] = count.get(self.photos[i]["kind"], 0) + 1
             PW = np.array([1.0 / count[self.photos[i]["kind"]] for i in photo_ids for v in self.views[i]], dtype=np.float32)
+            PW *= len(PW) / PW.sum()
+        if self.grey_weight > 0 and len(PR):
+            # each grey copy weighs grey_weight x its photo (then the mean weight is 1 again)
+            PW *= np.array([self.grey_weight if self.grey[i] else 1.0 for i in photo_ids for v in self.views[i]],
+                           dtype=np.float32)
             PW *= len(PW) / PW.sum()
         W = np.zeros((d, K), dtype=np.float32)
         b = np.zeros(K, dtype=np.float32)
@@ -192,7 +217,7 @@ class Data:
 
     def colour_whitening(self):
         if getattr(self, "_colour_whitening", None) is None:
-            tune = [i for i, p in enumerate(self.photos) if p["split"] == "tune"]
+            tune = [i for i, p in enumerate(self.photos) if p["split"] == "tune" and not p.get("grey")]
             C = self.CZ[tune]
             e, U = np.linalg.eigh(C.T @ C / max(1, len(C)))
             self._colour_whitening = (U / np.sqrt(np.maximum(e, 0) + 1.0)) @ U.T
@@ -204,11 +229,21 @@ class Data:
             self._whitening = (U / np.sqrt(np.maximum(e, 0) + 1.0)) @ U.T
         return self._whitening
 
-    def probabilities(self, model, i):
+    def parts(self, model, i):
+        """The three parts of photo i's scores: structural logits (largest over the views, bias
+        included), colour logits, log of the best structural similarity per shader."""
         W, b, V = model
-        scores = ((self.TZ[self.views[i]] @ W + b).max(axis=0) + self.CZ[i] @ V
-                  + self.alpha * np.log(np.maximum(self.S[i], 1e-6)))
-        return softmax(scores[None, :])[0]
+        if isinstance(V, tuple):  # a header's colour weights with their offset (load_header)
+            colour = self.CZ[i] @ V[0] + (V[1] if self.has_colour[i] else 0.0)
+        else:
+            colour = self.CZ[i] @ V
+        return ((self.TZ[self.views[i]] @ W + b).max(axis=0), colour,
+                np.log(np.maximum(self.S[i], 1e-6)))
+
+    def probabilities(self, model, i):
+        s, c, n = self.parts(model, i)
+        ts, tc = self.temperature
+        return softmax((s / ts + c / tc + self.alpha * n)[None, :])[0]
 
 
 def score(data, model, ids):
@@ -277,6 +312,141 @@ def calibrate(data, folds, precision):
     return p_good, out, (sum(kept), len(kept))
 
 
+def pairs_of(data, folds, grey=False):
+    """(model, row) of the out-of-fold test photos, or of their greyscale copies."""
+    if not grey:
+        return [(m, i) for m, test in folds for i in test]
+    return [(m, data.grey_of[i]) for m, test in folds for i in test if i in data.grey_of]
+
+
+def top_k(data, pairs):
+    if not pairs:
+        return float("nan"), float("nan")
+    t1 = np.mean([data.A[i, int(np.argmax(data.probabilities(m, i)))] > 0 for m, i in pairs])
+    t3 = np.mean([data.A[i, np.argsort(-data.probabilities(m, i))[:3]].any() for m, i in pairs])
+    return t1, t3
+
+
+def nll(data, pairs):
+    """Mean negative log-likelihood of the set-valued label: -log sum_{accepted} P."""
+    if not pairs:
+        return float("nan")
+    return float(np.mean([-np.log(max(1e-12, (data.probabilities(m, i) * data.A[i]).sum())) for m, i in pairs]))
+
+
+def reliability(data, pairs, edges=(0, 0.2, 0.4, 0.6, 0.8, 0.9, 1.0001)):
+    """Table rows (bin, count, mean top-1 P, share right) of the top-1 probability."""
+    out = []
+    top = [(data.probabilities(m, i).max(), data.A[i, int(np.argmax(data.probabilities(m, i)))] > 0) for m, i in pairs]
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        b = [(p, ok) for p, ok in top if lo <= p < hi]
+        if b:
+            out.append("[%.1f,%.1f) n %3d  mean P %.3f  right %.3f" % (lo, min(hi, 1), len(b), np.mean([p for p, _ in b]),
+                                                                       np.mean([ok for _, ok in b])))
+    return out
+
+
+def fit_temperature(data, pairs, fit_alpha=True, weights=None):
+    """Temperatures (structural, colour) and alpha minimising the out-of-fold NLL of `pairs`:
+    scores = s / Ts + c / Tc + alpha n. Coordinate search on a log grid, refined 4 times."""
+    parts = [data.parts(m, i) for m, i in pairs]
+    S = np.array([p[0] for p in parts]); C = np.array([p[1] for p in parts]); N = np.array([p[2] for p in parts])
+    A = np.array([data.A[i] for _, i in pairs])
+    w = np.ones(len(pairs)) if weights is None else np.asarray(weights, dtype=float)
+    w = w / w.sum()
+
+    def loss(ks, kc, a):
+        L = ks * S + kc * C + a * N
+        L = L - L.max(axis=1, keepdims=True)
+        E = np.exp(L)
+        return float(np.sum(w * (np.log(E.sum(axis=1)) - np.log((E * A).sum(axis=1) + 1e-300))))
+
+    x = [1.0 / data.temperature[0], 1.0 / data.temperature[1], data.alpha]
+    step = [0.5, 0.5, 1.0]
+    best = loss(*x)
+    for _ in range(40):
+        improved = False
+        for k in range(3 if fit_alpha else 2):
+            for d in (-1, 1):
+                y = list(x)
+                y[k] = max(1e-3, y[k] * np.exp(d * step[k])) if k < 2 else max(0.0, y[k] + d * step[k])
+                v = loss(*y)
+                if v < best - 1e-7:
+                    best, x, improved = v, y, True
+        if not improved:
+            step = [t / 2 for t in step]
+            if max(step) < 1e-3:
+                break
+    return 1.0 / x[0], 1.0 / x[1], x[2], best
+
+
+def load_header(path, data):
+    """A written model header as (W, b, V) on this dump's standardisation, and its alpha and
+    temperatures (for comparing a committed model on the same rows)."""
+    text = open(path).read()
+
+    def arr(name):
+        m = re.search(r"%s\[[^\]]*\] = \{([^}]*)\}" % name, text)
+        return np.array([float(v) for v in m.group(1).replace("\n", " ").split(",") if v.strip()])
+
+    mean, scale, W, b = arr("kMean"), arr("kScale"), arr("kWeights"), arr("kBias")
+    cmean, cscale, V = arr("kColourMean"), arr("kColourScale"), arr("kColourWeights")
+    K = len(b)
+    W = W.reshape(-1, K)
+    # header z = (x - mean) / scale; the dump's z' = (x - m') / s'  ->  x = z' s' + m'
+    # logit = ((z' s' + m' - mean) / scale) W + b = z' (s'/scale) W + ((m' - mean)/scale) W + b
+    W2 = (data.scale / scale)[:, None] * W
+    b2 = b + ((data.mean - mean) / scale) @ W
+    if len(V) == 0 or not V.any():
+        V2 = np.zeros((data.CZ.shape[1], K))
+    else:
+        V = V.reshape(-1, K)
+        V2 = (data.cscale / cscale)[:, None] * V
+        b_c = ((data.cmean - cmean) / cscale) @ V  # colour offset (only where the colour term applies)
+        V2 = (V2, b_c)
+    def num(name, default):
+        m = re.search(r"%s = ([0-9.eE+-]+);" % name, text)
+        return float(m.group(1)) if m else default
+    return (W2, b2, V2), num("kStructuralWeight", 1.0), (num("kStructuralTemperature", 1.0), num("kColourTemperature", 1.0))
+
+
+def rescore_matches(data, model, folder, weights=(0, 0.25, 0.5, 1, 1.5, 2, 3)):
+    """The final choice of bench_match_eval --pictures JSONs (split "match" rows), re-scored with this
+    model's P: among each target's finalists (refined and polished similarity S) the one maximising
+    log S + share w log P (share 0.25 on clean patterns, where S >= 0.75 wins outright, as
+    search/match.cpp). The finalists were
+    chosen with the model of the run, so this is an estimate."""
+    rows = [i for i, p in enumerate(data.photos) if p["split"] == "match"]
+    out = {}
+    for w in weights:
+        ident = repro = same = 0
+        for i in rows:
+            r = json.load(open(os.path.join(folder, data.photos[i]["file"])))
+            P = data.probabilities(model, i)
+            share = 0.25 if r.get("pattern") else 1.0
+            cands = []
+            for st in r["starts"]:
+                if not st.get("finalist"):
+                    continue
+                for key in ("refined_similarity", "polished_similarity"):
+                    if key in st:
+                        cands.append((st["shader"], st[key], st["selection_probability"]))
+            if not cands:
+                continue
+            k = {n: j for j, n in enumerate(data.names)}
+            # as search/match.cpp: on a clean pattern S >= 0.75 (kCertainMatch) wins outright
+            best = max(cands, key=lambda c: 1e6 + c[1] if share < 1 and c[1] >= 0.75 else
+                       np.log(max(c[1], 1e-9)) + share * w * np.log(max(P[k[c[0]]], 1e-9)))
+            target = r["target"]["spec"]["shader"]
+            ident += best[0] == target
+            repro += best[0] == target or best[1] >= 0.95 * r["target"]["ceiling"]
+            same += best[0] == r["spec"]["shader"]
+        out[w] = (ident, repro, len(rows))
+        print("  match JSONs, w %-4g: identified %d/%d, reproduced %d/%d (same shader as the run: %d)" % (
+            w, ident, len(rows), repro, len(rows), same))
+    return out
+
+
 def write_header(path, data, model, version, p_good, argv, report):
     W, b, V = model
     def array(values, per_line=8):
@@ -319,7 +489,12 @@ def write_header(path, data, model, version, p_good, argv, report):
         "inline constexpr float kColourWeights[kColourFeatures * kShaders] = {", array(V.reshape(-1)), "};",
         "// Score of shader k = its largest logit over the views + kStructuralWeight * log(best",
         "// structural similarity of its catalogue samples to the whole photo).",
-        "inline constexpr double kStructuralWeight = %g;" % data.alpha,
+        "inline constexpr double kStructuralWeight = %.6g;" % data.alpha,
+        "// Calibration (fitted on the grouped out-of-fold NLL of the tune photos and their greyscale",
+        "// copies): the structural logits (largest over the views, bias included) are divided by",
+        "// kStructuralTemperature and the colour logits by kColourTemperature before the softmax.",
+        "inline constexpr double kStructuralTemperature = %.6g;" % data.temperature[0],
+        "inline constexpr double kColourTemperature = %.6g;" % data.temperature[1],
         "// \"good\" needs the matched shader's selection probability to reach this (out-of-fold",
         "// calibration on the tune split for the precision given to the fit).",
         "inline constexpr double kGoodProbability = %.4f;" % p_good,
@@ -341,6 +516,14 @@ def main():
     ap.add_argument("--balance", action="store_true", help="class-balanced photo weights (each kind weighs the same)")
     ap.add_argument("--colour", action="store_true", help="fit the colour term (see above)")
     ap.add_argument("--colour-l2", type=float, default=0.05, help="L2 penalty of the colour weights")
+    ap.add_argument("--grey-weight", type=float, default=0.0,
+                    help="train on the greyscale copies of the photos too (bench_select_dump --grey), each "
+                         "weighing this much of its photo (0: not)")
+    ap.add_argument("--calibrate", action="store_true",
+                    help="fit the temperatures (structural, colour) and alpha on the out-of-fold NLL of the tune "
+                         "photos and their grey copies, written to the header")
+    ap.add_argument("--calibrate-synthetic", action="store_true",
+                    help="calibrate on the synthetic renders too (half the weight; their colours are random)")
     ap.add_argument("--folds", type=int, default=5, help="grouped out-of-fold folds")
     ap.add_argument("--no-precondition", action="store_true", help="plain gradient descent (before session 7; unstable)")
     ap.add_argument("--ungrouped", action="store_true", help="the old 2 ungrouped folds (comparison only)")
@@ -348,6 +531,11 @@ def main():
                     help="train on the photos of split 'project' too (default: they are only scored)")
     ap.add_argument("--score-report", action="store_true",
                     help="also score the report split (the final check only: never choose options on it)")
+    ap.add_argument("--match-json", default="",
+                    help="folder of the bench_match_eval JSONs the dump's split 'match' rows come from "
+                         "(bench_select_dump --match-json): re-score their final choice with this model")
+    ap.add_argument("--compare", default="", help="a model header to score on the same rows (project, synthetic, match)")
+    ap.add_argument("--compare-only", action="store_true", help="stop after --compare")
     ap.add_argument("--precision", type=float, default=0.95, help="wanted precision of 'good'")
     ap.add_argument("--version", type=int, default=1)
     ap.add_argument("--alpha", type=float, default=None, help="structural weight (default: chosen, see above)")
@@ -357,11 +545,30 @@ def main():
     data.balance = args.balance
     data.colour = args.colour
     data.colour_l2 = args.colour_l2
+    data.grey_weight = args.grey_weight
     data.precondition = not args.no_precondition
     labels = {i["id"]: i for i in json.load(open(args.labels))["images"]}
     tune, report, synthetic = data.ids("tune"), data.ids("report"), data.ids("synthetic")
     project = data.ids("project")
     extra = project if args.train_project else []
+    if args.compare:
+        cmp_model, cmp_alpha, cmp_t = load_header(args.compare, data)
+        saved = (data.alpha, data.temperature)
+        data.alpha, data.temperature = cmp_alpha, cmp_t
+        print("compare %s (alpha %g, temperatures %g %g):" % (args.compare, cmp_alpha, cmp_t[0], cmp_t[1]))
+        pairs = [(cmp_model, i) for i in synthetic]
+        print("  synthetic top-1 %.3f top-3 %.3f NLL %.3f" % (top_k(data, pairs) + (nll(data, pairs),)))
+        for i in project:
+            for r in [i] + ([data.grey_of[i]] if i in data.grey_of else []):
+                p = data.probabilities(cmp_model, r)
+                o = np.argsort(-p)[:3]
+                print("  project%s %-28s %s" % (" grey" if data.grey[r] else "     ", os.path.basename(data.photos[r]["path"]),
+                                                " ".join("%s %.2f" % (data.names[k], p[k]) for k in o)))
+        if args.match_json:
+            rescore_matches(data, cmp_model, args.match_json)
+        data.alpha, data.temperature = saved
+        if args.compare_only:
+            return
     model = data.train(tune + extra, args.l2, args.photo_weight)
     tests = fold_ids(data, tune, args.folds, not args.ungrouped, labels)
     print("folds (%s): %s photos" % ("ungrouped 2" if args.ungrouped else "grouped by series",
@@ -370,23 +577,64 @@ def main():
     alpha = choose_alpha(data, folds, model, synthetic) if args.alpha is None else args.alpha
     data.alpha = alpha
     print("chosen alpha", alpha)
+
+    def summary(title):
+        colour_pairs, grey_pairs = pairs_of(data, folds), pairs_of(data, folds, grey=True)
+        synth_pairs = [(model, i) for i in synthetic]
+        print("%s (alpha %g, temperatures structural %.3f colour %.3f):" % (title, data.alpha, *data.temperature))
+        print("  OUT-OF-FOLD tune, photos:      top-1 %.3f top-3 %.3f NLL %.3f (%d)" % (
+            top_k(data, colour_pairs) + (nll(data, colour_pairs), len(colour_pairs))))
+        if grey_pairs:
+            print("  OUT-OF-FOLD tune, grey copies: top-1 %.3f top-3 %.3f NLL %.3f (%d)" % (
+                top_k(data, grey_pairs) + (nll(data, grey_pairs), len(grey_pairs))))
+        if synth_pairs:
+            print("  synthetic (%d renders of another catalogue): top-1 %.3f top-3 %.3f NLL %.3f" % (
+                (len(synth_pairs),) + top_k(data, synth_pairs) + (nll(data, synth_pairs),)))
+        for name, pairs in (("out-of-fold photos + grey copies", colour_pairs + grey_pairs), ("synthetic", synth_pairs)):
+            if pairs:
+                print("  reliability of the top-1 probability, %s:" % name)
+                for line in reliability(data, pairs):
+                    print("    " + line)
+        for i in project:
+            for r in [i] + ([data.grey_of[i]] if i in data.grey_of else []):
+                p = data.probabilities(model, r)
+                o = np.argsort(-p)[:3]
+                print("  project%s %-28s %s" % (" grey" if data.grey[r] else "     ", os.path.basename(data.photos[r]["path"]),
+                                                " ".join("%s %.2f" % (data.names[k], p[k]) for k in o)))
+        if args.match_json:
+            rescore_matches(data, model, args.match_json)
+
+    summary("uncalibrated")
+    if args.calibrate:
+        pairs = pairs_of(data, folds) + pairs_of(data, folds, grey=True)
+        weights = [1.0] * len(pairs)
+        if args.calibrate_synthetic and synthetic:
+            # the renders of another catalogue (the full model: they are held out from it) weigh as
+            # much in total as the out-of-fold photos: the matcher sees both kinds of target
+            weights += [len(pairs) / len(synthetic)] * len(synthetic)
+            pairs = pairs + [(model, i) for i in synthetic]
+        ts, tc, a, loss = fit_temperature(data, pairs, weights=weights)
+        data.temperature, data.alpha = (ts, tc), a
+        print("calibrated on %d rows: structural temperature %.3f, colour temperature %.3f, alpha %.3f, NLL %.3f"
+              % (len(pairs), ts, tc, a, loss))
+        summary("calibrated")
     t1, t3 = score(data, model, tune)
     print("tune   (%d photos, fitted on): top-1 %.3f top-3 %.3f" % (len(tune), t1, t3))
     p_good, oof, (right, kept) = calibrate(data, folds, args.precision)
-    if synthetic:
-        print("synthetic (%d renders of another catalogue): top-1 %.3f top-3 %.3f" % ((len(synthetic),) + score(data, model, synthetic)))
-    oof3 = np.mean([data.A[i, np.argsort(-data.probabilities(m, i))[:3]].any() for m, test in folds for i in test])
-    print("OUT-OF-FOLD tune: top-1 %.3f top-3 %.3f; p_good %.3f keeps %d of %d, %d right" % (
-        np.mean([ok for _, ok in oof]), oof3, p_good, kept, len(oof), right))
+    print("OUT-OF-FOLD tune: top-1 %.3f; p_good %.3f keeps %d of %d, %d right" % (
+        np.mean([ok for _, ok in oof]), p_good, kept, len(oof), right))
     kinds = sorted({data.photos[i]["kind"] for i in tune})
-    per_kind = {k: [0, 0] for k in kinds}
+    per_kind = {k: [0, 0, 0] for k in kinds}
     for m, test in folds:
         for i in test:
-            per_kind[data.photos[i]["kind"]][1] += 1
+            per_kind[data.photos[i]["kind"]][2] += 1
             per_kind[data.photos[i]["kind"]][0] += data.A[i, int(np.argmax(data.probabilities(m, i)))] > 0
-    print("out-of-fold per kind: " + ", ".join("%s %d/%d" % (k, v[0], v[1]) for k, v in per_kind.items()))
+            if i in data.grey_of:
+                g = data.grey_of[i]
+                per_kind[data.photos[i]["kind"]][1] += data.A[g, int(np.argmax(data.probabilities(m, g)))] > 0
+    print("out-of-fold per kind (photo, grey copy): " + ", ".join("%s %d/%d/%d" % (k, v[0], v[1], v[2]) for k, v in per_kind.items()))
     shown = [(i, m) for m, test in folds for i in sorted(test)]
-    shown += [(i, model) for i in project] + [(i, model) for i in synthetic[::8]]
+    shown += [(i, model) for i in synthetic[::8]]
     if args.score_report:
         r1, r3 = score(data, model, report)
         print("report (%d photos, held out) : top-1 %.3f top-3 %.3f" % (len(report), r1, r3))

@@ -8,14 +8,22 @@
 // DIR/structural.f32: float32, [photo][shader]: the best structural similarity of the shader's
 // samples to the whole photo (what match's structural scan computes);
 // DIR/colour.f32: float32, [photo][search::kColourStatistics]: the photo's colour statistics
-// (search::colour_statistics; NaN for the --synthetic rows, which have no image).
+// (search::colour_statistics; for the --synthetic rows, of the sample rendered again at 256 px with
+// its seed: catalogue samples have random colours, and the colour term must be measured on them too).
 // --augment N: N photo-like renders of every catalogue sample (another zoom, a lighting gradient,
 // blur, sensor noise; seeded by --augment-seed), their features in DIR/augmented.f32
 // [render][feature] and their shader indices in evidence.json "augmented": training rows for
 // what a shader looks like when photographed rather than rendered cleanly.
+// --grey: after each listed photo, its greyscale copy (linear-RGB luminance in all three channels)
+// as another row with the same label, "grey": true and "source" (the photo's row): features and
+// colour statistics from the grey image, so its colour term is left out, as for a greyscale photo.
+// --match-json DIR: the targets of bench_match_eval --pictures JSONs in DIR (each file's
+// target.spec rendered as bench_match_eval does, 256 px) as rows of split "match", accepted = the
+// target's shader, "file" = the JSON's name: the selection of a new model on those targets.
 // The fit of the selection weights reads these files (bench/fit_selection.py).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -65,18 +73,37 @@ Image photographed(Renderer& renderer, const ShaderDecl& decl, const catalog::Sa
   return img;
 }
 
+// The greyscale copy of a photo: every pixel's linear-RGB luminance (Rec. 709) in all channels.
+Image greyscale(const Image& photo) {
+  Image g = photo;
+  for (size_t i = 0; i + 2 < g.pixels.size(); i += 3) {
+    const float y = 0.2126729f * g.pixels[i] + 0.7151522f * g.pixels[i + 1] + 0.0721750f * g.pixels[i + 2];
+    g.pixels[i] = g.pixels[i + 1] = g.pixels[i + 2] = y;
+  }
+  return g;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string db, list, out, synthetic;
+  std::string db, list, out, synthetic, match_json;
+  bool grey = false;
   int augment = 0;
   unsigned augment_seed = 1;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--grey") {
+      grey = true;
+      for (int j = i; j + 1 < argc; ++j) argv[j] = argv[j + 1];
+      --argc;
+      break;
+    }
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--db") db = argv[i + 1];
     else if (a == "--list") list = argv[i + 1];
     else if (a == "--out") out = argv[i + 1];
     else if (a == "--synthetic") synthetic = argv[i + 1];
+    else if (a == "--match-json") match_json = argv[i + 1];
     else if (a == "--augment") augment = std::stoi(argv[i + 1]);
     else if (a == "--augment-seed") augment_seed = static_cast<unsigned>(std::stoul(argv[i + 1]));
   }
@@ -130,6 +157,18 @@ int main(int argc, char** argv) {
         }
     };
     int n = 0;
+    // One row: structural similarities, colour statistics and the features of every view.
+    auto write_photo = [&](const Image& photo, nlohmann::json entry) {
+      const auto views = search::target_views(photo);
+      entry["scales"] = views.size();
+      write_structural(metric.features(photo, 256));
+      write_colour(search::colour_statistics(photo));
+      for (const auto& view : views) {
+        write_target(metric.features(view.image, 256));
+        entry["views"].push_back(view.name);
+      }
+      index["photos"].push_back(entry);
+    };
     while (std::getline(in, line)) {
       if (line.empty() || line[0] == '#') continue;
       std::stringstream ls(line);
@@ -139,32 +178,53 @@ int main(int argc, char** argv) {
       std::getline(ls, split, '\t');
       std::getline(ls, kind, '\t');
       const Image photo = search::prepare_target(path, "");
-      const auto views = search::target_views(photo);
-      nlohmann::json entry = {{"path", path}, {"accepted", accepted}, {"split", split}, {"kind", kind},
-                              {"scales", views.size()}};
-      write_structural(metric.features(photo, 256));
-      write_colour(search::colour_statistics(photo));
-      for (const auto& view : views) {
-        write_target(metric.features(view.image, 256));
-        entry["views"].push_back(view.name);
+      const nlohmann::json entry = {{"path", path}, {"accepted", accepted}, {"split", split}, {"kind", kind}};
+      const size_t row = index["photos"].size();
+      write_photo(photo, entry);
+      if (grey) {
+        auto g = entry;
+        g["grey"] = true;
+        g["source"] = row;
+        write_photo(greyscale(photo), g);
       }
-      index["photos"].push_back(entry);
       std::fprintf(stderr, "\r%d photos", ++n);
     }
     // --synthetic CAT2: the samples of another catalogue (another seed) as renders of known shaders,
     // one view each (their stored features), split "synthetic".
     if (!synthetic.empty()) {
       catalog::Store other(synthetic, catalog::Store::Access::Read);
+      const auto& library = ShaderLibrary::builtin();
+      Renderer renderer(library);
       for (const auto& s : other.shaders()) {
         const auto cat2 = other.load(s.name, false);
+        const ShaderDecl& decl = library.get(s.name);
         for (size_t k = 0; k < cat2.samples.size(); ++k) {
           const auto& f = cat2.samples[k].features;
           write_structural(f);
-          write_colour(std::vector<double>(search::kColourStatistics, std::nan("")));
+          // the sample rendered again (its random colours), for the colour term a target like it gets
+          write_colour(search::colour_statistics(
+              renderer.render_batch(decl, {cat2.samples[k].packed}, {cat2.samples[k].seed}, RenderSettings{}).front()));
           write_target(f);
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
         }
+      }
+    }
+    if (!match_json.empty()) {
+      const auto& library = ShaderLibrary::builtin();
+      Renderer renderer(library);
+      std::vector<fs::path> files;
+      for (const auto& e : fs::directory_iterator(match_json))
+        if (e.path().extension() == ".json") files.push_back(e.path());
+      std::sort(files.begin(), files.end());
+      for (const auto& file : files) {
+        std::ifstream in_json(file);
+        const auto j = nlohmann::json::parse(in_json);
+        if (!j.contains("target") || !j["target"].contains("spec")) continue;
+        const auto spec = TextureSpec::from_json(j["target"]["spec"]);
+        write_photo(renderer.render(spec, RenderSettings{}),
+                    {{"path", spec.shader + "@" + file.filename().string()}, {"accepted", spec.shader},
+                     {"split", "match"}, {"kind", spec.shader}, {"file", file.filename().string()}});
       }
     }
     if (augment > 0) {

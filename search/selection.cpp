@@ -108,13 +108,16 @@ SelectionTarget::SelectionTarget(const Image& photo, const metrics::Metric& metr
       logits_[k] = std::max(logits_[k], logit);
     }
   }
+  // Calibration: the structural logits divided by their temperature, the colour logits by theirs.
+  for (double& l : logits_) l /= model::kStructuralTemperature;
   // The colour term: the same for every view (colour statistics of the whole photo).
   static_assert(model::kColourFeatures == kColourStatistics, "selection model and colour_statistics disagree");
   const auto stats = colour_statistics(photo);
   const bool greyscale = stats[6] < kGreyscaleChroma;  // [6]: mean chroma
   for (size_t c = 0; c < (greyscale ? 0 : model::kColourFeatures); ++c) {
     const double zc = (stats[c] - model::kColourMean[c]) / model::kColourScale[c];
-    for (size_t k = 0; k < model::kShaders; ++k) logits_[k] += zc * model::kColourWeights[c * model::kShaders + k];
+    for (size_t k = 0; k < model::kShaders; ++k)
+      logits_[k] += zc * model::kColourWeights[c * model::kShaders + k] / model::kColourTemperature;
   }
 }
 

@@ -56,7 +56,9 @@ class SelectionTarget {
   // Throws proctex::Error when `metric` is not the metric the model was fitted on.
   SelectionTarget(const Image& photo, const metrics::Metric& metric);
   // Probability of each of `shaders`: softmax over them of each shader's largest logit over the
-  // views, plus its colour logit (a linear term of colour_statistics fitted on the tune photos),
+  // views divided by kStructuralTemperature, plus its colour logit divided by kColourTemperature
+  // (a linear term of colour_statistics fitted on the tune photos; the temperatures are calibrated
+  // out of fold, selection_model.h),
   // plus kStructuralWeight * log(its best structural similarity in the catalogue, given in
   // `best_structural`, same order): the nearest-sample evidence recognises clean renders. A shader
   // the model does not know (a user's shader) gets the lowest known logit.

@@ -2669,6 +2669,11 @@ inline constexpr float kColourWeights[kColourFeatures * kShaders] = {};
 // Score of shader k = its largest logit over the views + kStructuralWeight * log(best
 // structural similarity of its catalogue samples to the whole photo).
 inline constexpr double kStructuralWeight = 1;
+// Calibration (fitted on the grouped out-of-fold NLL of the tune photos and their greyscale
+// copies): the structural logits (largest over the views, bias included) are divided by
+// kStructuralTemperature and the colour logits by kColourTemperature before the softmax.
+inline constexpr double kStructuralTemperature = 1;
+inline constexpr double kColourTemperature = 1;
 // "good" needs the matched shader's selection probability to reach this (out-of-fold
 // calibration on the tune split for the precision given to the fit).
 inline constexpr double kGoodProbability = 0.9510;
