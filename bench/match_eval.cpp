@@ -74,24 +74,13 @@ double rmse_at(const Image& a, const Image& b, int dx, int dy) {
   return std::sqrt(sum / (3.0 * (w - std::abs(dx)) * (h - std::abs(dy))));
 }
 
+// The smallest rmse_at over whole-pixel shifts within +-kImageShift.
 double shifted_rmse(const Image& a, const Image& b) {
   double best = 1e30;
-  const int w = a.width, h = a.height;
-  for (int dy = -kImageShift; dy <= kImageShift; ++dy)
-    for (int dx = -kImageShift; dx <= kImageShift; ++dx) {
-      double sum = 0;
-      for (int y = std::max(0, -dy); y < std::min(h, h - dy); ++y)
-        for (int x = std::max(0, -dx); x < std::min(w, w - dx); ++x) {
-          const float* p = a.pixel(x, y);
-          const float* q = b.pixel(x + dx, y + dy);
-          for (int c = 0; c < 3; ++c) sum += double(p[c] - q[c]) * (p[c] - q[c]);
-        }
-      best = std::min(best, sum / (3.0 * (w - std::abs(dx)) * (h - std::abs(dy))));
-      if (best == 0) return 0;
-    }
-  return std::sqrt(best);
+  for (int dy = -kImageShift; dy <= kImageShift && best > 0; ++dy)
+    for (int dx = -kImageShift; dx <= kImageShift && best > 0; ++dx) best = std::min(best, rmse_at(a, b, dx, dy));
+  return best;
 }
-
 
 // SplitMix64: portable, so the targets are the same on every machine.
 struct Random {
