@@ -304,3 +304,55 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
 }
 
 }  // namespace proctex::search
+
+namespace proctex::search {
+
+PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
+                                     const std::vector<std::string>& pinned, const std::vector<float>& wanted,
+                                     const std::vector<uint8_t>& mask, int side, Renderer& renderer) {
+  const auto colours = free_colours(decl, pinned);
+  const size_t k = colours.size();
+  // Per colour its grey basis alone, then all free colours black (the offset).
+  std::vector<std::vector<float>> batch;
+  for (size_t white = 0; white <= k; ++white) {
+    auto p = packed;
+    for (size_t j = 0; j < k; ++j)
+      for (int ch = 0; ch < 3; ++ch) p[colours[j]->offset + ch] = j == white ? kBasisLevel : 0.0f;
+    batch.push_back(std::move(p));
+  }
+  RenderSettings settings;
+  settings.width = settings.height = side;
+  const auto images = renderer.render_batch(decl, batch, std::vector<uint32_t>(batch.size(), seed), settings);
+  LinearModel model;
+  model.offset = images[k];
+  for (size_t j = 0; j < k; ++j) {
+    Image w = images[j];
+    for (size_t i = 0; i < w.pixels.size(); ++i) w.pixels[i] = (w.pixels[i] - model.offset.pixels[i]) / kBasisLevel;
+    model.weights.push_back(std::move(w));
+    for (int ch = 0; ch < 3; ++ch) {
+      model.lower.push_back(colours[j]->min);
+      model.upper.push_back(colours[j]->max);
+    }
+  }
+  PixelColourFit fit;
+  fit.packed = packed;
+  fit.renders = static_cast<long>(batch.size());
+  const auto solved = k ? model.solve(wanted, &mask) : std::vector<double>{};
+  for (size_t j = 0; j < k; ++j)
+    for (int ch = 0; ch < 3; ++ch) fit.packed[colours[j]->offset + ch] = float(solved[3 * j + ch]);
+  const Image predicted = model.combine(solved);
+  double sum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < mask.size(); ++i) {
+    if (!mask[i]) continue;
+    for (int ch = 0; ch < 3; ++ch) {
+      const double d = double(predicted.pixels[3 * i + ch]) - wanted[3 * i + ch];
+      sum += d * d;
+    }
+    count += 3;
+  }
+  fit.mse = count ? sum / double(count) : 1.0;
+  return fit;
+}
+
+}  // namespace proctex::search

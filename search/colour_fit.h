@@ -15,6 +15,7 @@
 // the initial ranking in both directions (dark-on-light and light-on-dark), and the result with
 // the best colour similarity is kept. An optional NLopt polish then maximises the colour metric
 // on the same basis.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,20 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
                                          const std::vector<uint32_t>& seeds, const std::vector<std::string>& pinned,
                                          const ColourTarget& target, Renderer& renderer, bool polish,
                                          bool registered = false);
+
+// The free colours of `packed` (its shape kept) that reproduce `wanted` (side x side linear RGB,
+// 3 floats per pixel) pixel for pixel where `mask` (one byte per pixel) is non-zero: least
+// squares on the shader's colour basis (free colours + 1 renders, no histogram, no registration).
+// `mse`: the model's mean squared RGB residual on the mask - exact for a shader linear in its
+// colours (check that with fit_colours' linearity test first). The pixel polish's inner step.
+struct PixelColourFit {
+  std::vector<float> packed;
+  double mse = 1.0;
+  long renders = 0;
+};
+PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
+                                     const std::vector<std::string>& pinned, const std::vector<float>& wanted,
+                                     const std::vector<uint8_t>& mask, int side, Renderer& renderer);
 
 // Renders fit_colours spends for `starts` starting points of `decl`.
 long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts);

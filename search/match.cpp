@@ -16,6 +16,7 @@
 #include "metrics/aligned.h"
 #include "metrics/magnitude.h"
 #include "search/colour_fit.h"
+#include "search/pixel_polish.h"
 #include "search/selection.h"
 #include "shaders/library.h"
 #include "shaders/parameter_space.h"
@@ -834,8 +835,42 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         names.push_back("aligned_similarity");
       }
     }
-    const auto images = renderer.render_batch(*base.decl, tries, std::vector<uint32_t>(tries.size(), base.seed), full);
+    auto images = renderer.render_batch(*base.decl, tries, std::vector<uint32_t>(tries.size(), base.seed), full);
     evaluations += static_cast<long>(tries.size());
+    // 6. Pixel polish (pixel_polish.h): from the try that registers best, the plain RGB
+    // difference decides what the statistics and the registered pixels cannot (a softness traded
+    // against a duty and a colour; swapped colours hidden by a shift).
+    if (polish["deterministic"] && !(stop && *stop)) {
+      if (!registered_target) registered_target = make_colour_target(target, o.resolution);
+      size_t closest = 0;
+      double closest_rmse = -1;
+      for (size_t k = 0; k < tries.size(); ++k) {
+        const double rmse = metrics::AlignedMetric::register_rgb(registered_target->rgb, images[k]).rmse;
+        if (closest_rmse < 0 || rmse < closest_rmse) {
+          closest_rmse = rmse;
+          closest = k;
+        }
+      }
+      const long pixel_budget = o.budget.max_evaluations > 0
+                                    ? std::min(3 * kPixelPolishEvaluations + 3, o.budget.max_evaluations - evaluations)
+                                    : 3 * kPixelPolishEvaluations + 3;
+      if (closest_rmse <= kPixelPolishStartRmse && pixel_budget > 10) {
+        nlohmann::json pixel_report;
+        const auto px = pixel_polish(*base.decl, tries[closest], base.seed, pinned, registered_target->rgb, renderer,
+                                     pixel_budget, pixel_report);
+        evaluations += px.evaluations;
+        polish["pixel"] = nlohmann::json{{"from", names[closest]}, {"starts", pixel_report}, {"evaluations", px.evaluations}};
+        if (px.rmse >= 0) {
+          tries.push_back(px.packed);
+          names.push_back("pixel_polished_similarity");
+          images.push_back(renderer.render_batch(*base.decl, {px.packed}, std::vector<uint32_t>{base.seed}, full).front());
+          evaluations += 1;
+          polish["pixel"]["start"] = px.start;
+          polish["pixel"]["rmse"] = px.rmse;
+          polish["pixel"]["shift"] = nlohmann::json::array({px.dx, px.dy});
+        }
+      }
+    }
     double best_s = final_candidates[best_of_shader].similarity;
     int kept = -1;
     std::vector<metrics::Features> features;

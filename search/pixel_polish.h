@@ -1,0 +1,49 @@
+#pragma once
+// The pixel polish: the last step of recovering a deterministic pattern (issue 12, "every
+// continuous parameter within 2% of its range"). After the magnitude polish and the align stage
+// (match.h) a pattern renders within a few thousandths RGB RMS of the target, but some parameters
+// can still be far off: a softness traded against a duty and a colour, or a duty complemented with
+// the colours swapped and the pattern shifted by half a period. The statistics and the
+// registered-pixel metric are (by design) blind to both. This step minimises the plain RGB
+// difference instead (metrics/pixels.h) at a fixed registration, over every continuous
+// parameter (colours included), discrete ones pinned, with BOBYQA: the difference is smooth and
+// nearly quadratic there.
+//
+// It starts from the point as found and from its colour-swapped variants (two colour parameters
+// swapped, and with a `duty` complemented as well): the swap that a shifted registration hid is
+// undone, and the variant that lines up without a shift wins when it is as exact.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "image/image.h"
+#include "shaders/renderer.h"
+#include "shaders/shader.h"
+
+namespace proctex::search {
+
+// Points that register farther than this from the target are not polished: the pixels are only
+// informative once the shape lines up (measured: the align stage's right answers end below 0.011).
+inline constexpr double kPixelPolishStartRmse = 0.03;
+// Renders per polished start.
+inline constexpr long kPixelPolishEvaluations = 500;
+
+struct PixelPolishResult {
+  std::vector<float> packed;
+  double rmse = -1.0;  // RGB RMS against the target at (dx, dy), on the overlap; < 0: nothing polished
+  int dx = 0, dy = 0;  // render(x + dx, y + dy) ~ target(x, y)
+  std::string start;   // "as found", "colours swapped", "colours swapped, duty complemented"
+  long evaluations = 0;
+};
+
+// `target`: the target's linear RGB at the renders' side (square). `pinned`: parameters kept
+// (the user's --fix); discrete parameters are always kept. Returns the best polished point over
+// the starts (lowest RMS; within 1e-4 the shorter shift), or rmse < 0 when no start registered
+// within kPixelPolishStartRmse. `report` gets each start's RMS before and after.
+PixelPolishResult pixel_polish(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
+                               const std::vector<std::string>& pinned, const Image& target, Renderer& renderer,
+                               long max_evaluations, nlohmann::json& report);
+
+}  // namespace proctex::search
