@@ -852,8 +852,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         }
       }
       const long pixel_budget = o.budget.max_evaluations > 0
-                                    ? std::min(3 * kPixelPolishEvaluations + 3, o.budget.max_evaluations - evaluations)
-                                    : 3 * kPixelPolishEvaluations + 3;
+                                    ? std::min(kPixelPolishBudget, o.budget.max_evaluations - evaluations)
+                                    : kPixelPolishBudget;
       if (closest_rmse <= kPixelPolishStartRmse && pixel_budget > 10) {
         nlohmann::json pixel_report;
         const auto px = pixel_polish(*base.decl, tries[closest], base.seed, pinned, registered_target->rgb, renderer,

@@ -233,9 +233,33 @@ PixelPolishResult pixel_polish(const ShaderDecl& decl, const std::vector<float>&
     renders = renderer.render_batch(decl, points, std::vector<uint32_t>(points.size(), seed), settings);
     best.evaluations += static_cast<long>(points.size());
   }
-  report = nlohmann::json::array();
+  // Each start at its best registration and, when that is elsewhere, at the shader's own origin:
+  // a pattern periodic along a direction (stripes) registers almost as well at many shifts, and
+  // only at the origin can its parameters be the target's.
+  struct Candidate {
+    size_t start;
+    metrics::AlignedMetric::Registration at;
+  };
+  std::vector<Candidate> candidates;
+  const metrics::PixelMetric pixels(side);
+  const auto unshifted = pixels.target_features(target, 0, 0);
   for (size_t i = 0; i < starts.size(); ++i) {
     const auto reg = metrics::AlignedMetric::register_rgb(target, renders[i]);
+    candidates.push_back({i, reg});
+    if (reg.dx != 0 || reg.dy != 0)
+      candidates.push_back({i, {std::sqrt(pixels.distance(unshifted.values, pixels.features(renders[i], side).values)), 0, 0}});
+  }
+  // At the origin first (only there can the parameters be the target's, and a start exact there
+  // ends the polish), then closest first: the budget goes where the pixels already agree.
+  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    const bool a0 = a.at.dx == 0 && a.at.dy == 0, b0 = b.at.dx == 0 && b.at.dy == 0;
+    return a0 != b0 ? a0 : a.at.rmse < b.at.rmse;
+  });
+  report = nlohmann::json::array();
+  const auto shift = [](int dx, int dy) { return std::abs(dx) + std::abs(dy); };
+  for (const auto& [i, reg] : candidates) {
+    // Exact at the origin already: nothing left to find.
+    if (best.rmse >= 0 && best.rmse < 2e-4 && shift(best.dx, best.dy) == 0) break;
     nlohmann::json entry = {{"start", starts[i].name}, {"rmse_before", reg.rmse}, {"shift", {reg.dx, reg.dy}}};
     if (reg.rmse > kPixelPolishStartRmse || best.evaluations >= max_evaluations) {
       report.push_back(entry);
@@ -248,7 +272,6 @@ PixelPolishResult pixel_polish(const ShaderDecl& decl, const std::vector<float>&
     best.evaluations += used;
     entry["rmse_after"] = rmse;
     report.push_back(entry);
-    const auto shift = [](int dx, int dy) { return std::abs(dx) + std::abs(dy); };
     const bool better = best.rmse < 0 || rmse < best.rmse - 1e-4 ||
                         (rmse <= best.rmse + 1e-4 && shift(reg.dx, reg.dy) < shift(best.dx, best.dy));
     if (better) {
