@@ -926,14 +926,21 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
 
   // A near-certain similarity wins outright (the verdict's kCertainMatch); otherwise similarity
   // and selection decide together.
+  // A finalist that reproduces the target at less than 1/kOutclassedRatio of another finalist's
+  // similarity is not chosen, however likely the selection finds its material: the selection can
+  // be sure and wrong (a knit render: P(grass) 0.96, grass S 0.135 against knit's 0.599).
+  double best_similarity = 0.0;
+  for (const auto& c : final_candidates) best_similarity = std::max(best_similarity, c.similarity);
   double best = -1e300;
   for (auto& c : final_candidates) {
     const bool pixel_exact = c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse;
     const bool visibly_other = pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
+    const bool outclassed = c.similarity * kOutclassedRatio < best_similarity;
     const double score = pixel_exact ? 2e6 - c.image_rmse
                          : pattern && c.similarity >= kCertainMatch && !visibly_other
                              ? 1e6 + c.similarity
-                             : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
+                             : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
+                                   (outclassed ? 1e3 : 0.0);
     if (score > best) {
       best = score;
       result.probability = c.from->probability;

@@ -26,7 +26,7 @@ namespace proctex::search {
 
 // Points that register farther than this from the target are not polished: the pixels are only
 // informative once the shape lines up (measured: the align stage's right answers end below 0.011).
-inline constexpr double kPixelPolishStartRmse = 0.03;
+inline constexpr double kPixelPolishStartRmse = 0.05;
 // Renders per polished start (a 9-parameter swirl converges in about 300), and for the whole polish.
 inline constexpr long kPixelPolishEvaluations = 500;
 inline constexpr long kPixelPolishBudget = 1200;
