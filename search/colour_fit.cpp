@@ -46,7 +46,10 @@ struct LinearModel {
 
   // Least-squares colours that make the model reproduce `wanted` (3 floats per pixel), per channel.
   // `mask` (optional, one byte per pixel): only the pixels where it is non-zero count.
-  std::vector<double> solve(const std::vector<float>& wanted, const std::vector<uint8_t>* mask = nullptr) const {
+  // `clamp`: each colour into its declared range (off: the unconstrained optimum, which is smooth
+  // in the shape - the pixel polish's objective).
+  std::vector<double> solve(const std::vector<float>& wanted, const std::vector<uint8_t>* mask = nullptr,
+                            bool clamp = true) const {
     const size_t k = weights.size();
     std::vector<double> colours(3 * k, 0.0);
     for (int ch = 0; ch < 3; ++ch) {
@@ -65,7 +68,7 @@ struct LinearModel {
       ata = ata.selfadjointView<Eigen::Upper>();
       ata.diagonal().array() += 1e-6 * (1.0 + ata.diagonal().maxCoeff());  // a colour that shows nowhere stays put
       const Eigen::VectorXd x = ata.ldlt().solve(atb);
-      for (size_t a = 0; a < k; ++a) colours[3 * a + ch] = std::clamp(x[a], lower[3 * a + ch], upper[3 * a + ch]);
+      for (size_t a = 0; a < k; ++a) colours[3 * a + ch] = clamp ? std::clamp(x[a], lower[3 * a + ch], upper[3 * a + ch]) : x[a];
     }
     return colours;
   }
@@ -309,7 +312,8 @@ namespace proctex::search {
 
 PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                      const std::vector<std::string>& pinned, const std::vector<float>& wanted,
-                                     const std::vector<uint8_t>& mask, int side, Renderer& renderer) {
+                                     const std::vector<uint8_t>& mask, int side, Renderer& renderer,
+                                     bool clamp_colours) {
   const auto colours = free_colours(decl, pinned);
   const size_t k = colours.size();
   // Per colour its grey basis alone, then all free colours black (the offset).
@@ -337,9 +341,11 @@ PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<f
   PixelColourFit fit;
   fit.packed = packed;
   fit.renders = static_cast<long>(batch.size());
-  const auto solved = k ? model.solve(wanted, &mask) : std::vector<double>{};
+  const auto solved = k ? model.solve(wanted, &mask, clamp_colours) : std::vector<double>{};
   for (size_t j = 0; j < k; ++j)
-    for (int ch = 0; ch < 3; ++ch) fit.packed[colours[j]->offset + ch] = float(solved[3 * j + ch]);
+    for (int ch = 0; ch < 3; ++ch)
+      fit.packed[colours[j]->offset + ch] =
+          float(std::clamp(solved[3 * j + ch], double(colours[j]->min), double(colours[j]->max)));
   const Image predicted = model.combine(solved);
   double sum = 0;
   size_t count = 0;

@@ -62,6 +62,9 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
 // squares on the shader's colour basis (free colours + 1 renders, no histogram, no registration).
 // `mse`: the model's mean squared RGB residual on the mask - exact for a shader linear in its
 // colours (check that with fit_colours' linearity test first). The pixel polish's inner step.
+// `clamp_colours` false: `mse` is that of the unconstrained least-squares colours (smooth in the
+// shape, so a local search is not caught where a colour leaves its range on the way); `packed`
+// always holds colours clamped into their ranges.
 struct PixelColourFit {
   std::vector<float> packed;
   double mse = 1.0;
@@ -69,7 +72,8 @@ struct PixelColourFit {
 };
 PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                      const std::vector<std::string>& pinned, const std::vector<float>& wanted,
-                                     const std::vector<uint8_t>& mask, int side, Renderer& renderer);
+                                     const std::vector<uint8_t>& mask, int side, Renderer& renderer,
+                                     bool clamp_colours = true);
 
 // Renders fit_colours spends for `starts` starting points of `decl`.
 long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts);

@@ -91,7 +91,7 @@ double projected_objective(unsigned n, const double* x, double*, void* data) {
   auto& c = *static_cast<ProjectedContext*>(data);
   if (c.renders >= c.budget) throw nlopt::forced_stop();
   const auto fit = fit_colours_to_pixels(*c.decl, c.shape->to_packed(std::vector<double>(x, x + n)), c.seed, *c.pinned,
-                                         *c.wanted, *c.mask, c.side, *c.renderer);
+                                         *c.wanted, *c.mask, c.side, *c.renderer, false);
   c.renders += fit.renders;
   if (fit.mse < c.best_mse) {
     c.best_mse = fit.mse;
