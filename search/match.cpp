@@ -343,6 +343,7 @@ nlohmann::json MatchResult::to_json() const {
           {"pattern", pattern},
           {"pixel_exact", pixel_exact},
           {"visibly_other", visibly_other},
+          {"outclassed", outclassed},
           {"image_rmse", image_rmse >= 0 ? nlohmann::json(image_rmse) : nlohmann::json(nullptr)},
           {"polish", polish},
           {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}}},
@@ -926,35 +927,40 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
 
   // A near-certain similarity wins outright (the verdict's kCertainMatch); otherwise similarity
   // and selection decide together.
-  // A finalist that reproduces the target at less than 1/kOutclassedRatio of another finalist's
-  // similarity is not chosen, however likely the selection finds its material: the selection can
-  // be sure and wrong (a knit render: P(grass) 0.96, grass S 0.135 against knit's 0.599).
-  double best_similarity = 0.0;
-  for (const auto& c : final_candidates) best_similarity = std::max(best_similarity, c.similarity);
-  double best = -1e300;
-  for (auto& c : final_candidates) {
+  // When the choice reproduces the target at less than 1/kOutclassedRatio of another finalist's
+  // similarity, that finalist is chosen instead, however likely the selection finds the first
+  // one's material: the selection can be sure and wrong (a knit render: P(grass) 0.96, grass S 0.135
+  // against knit's 0.599).
+  const auto score_of = [&](const Candidate& c) {
     const bool pixel_exact = c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse;
     const bool visibly_other = pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
-    const bool outclassed = c.similarity * kOutclassedRatio < best_similarity;
-    const double score = pixel_exact ? 2e6 - c.image_rmse
-                         : pattern && c.similarity >= kCertainMatch && !visibly_other
-                             ? 1e6 + c.similarity
-                             : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
-                                   (outclassed ? 1e3 : 0.0);
-    if (score > best) {
-      best = score;
-      result.probability = c.from->probability;
-      result.spec = spec_from_packed(*c.from->decl, c.packed, c.from->seed);
-      result.similarity = c.similarity;
-      result.polish = c.polish;
-      result.image_rmse = c.image_rmse;
-      result.pixel_exact = pixel_exact;
-      result.visibly_other = visibly_other;
-      result.per_metric.clear();
-      if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
-        for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
-      result.per_metric[metric.id()] = c.similarity;
-    }
+    return pixel_exact ? 2e6 - c.image_rmse
+           : pattern && c.similarity >= kCertainMatch && !visibly_other
+               ? 1e6 + c.similarity
+               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
+  };
+  const Candidate* final_choice = nullptr;
+  const Candidate* most_similar = nullptr;
+  for (const auto& c : final_candidates) {
+    if (!final_choice || score_of(c) > score_of(*final_choice)) final_choice = &c;
+    if (!most_similar || c.similarity > most_similar->similarity) most_similar = &c;
+  }
+  const bool outclassed = final_choice && score_of(*final_choice) < 1e6 && final_choice->similarity * kOutclassedRatio < most_similar->similarity;
+  if (outclassed) final_choice = most_similar;
+  if (final_choice) {
+    const Candidate& c = *final_choice;
+    result.probability = c.from->probability;
+    result.spec = spec_from_packed(*c.from->decl, c.packed, c.from->seed);
+    result.similarity = c.similarity;
+    result.polish = c.polish;
+    result.image_rmse = c.image_rmse;
+    result.pixel_exact = c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse;
+    result.visibly_other = pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
+    result.outclassed = outclassed;
+    result.per_metric.clear();
+    if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
+      for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
+    result.per_metric[metric.id()] = c.similarity;
   }
   result.timings["polish"] = polish_seconds;  // included in "final"
   result.timings["final"] = seconds_since(t_final);
