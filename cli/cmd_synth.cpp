@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -43,6 +44,7 @@ struct SynthCliOptions {
   std::vector<std::string> apply;
   float map_weight = 0.5f;
   int bits = 0;
+  int png_compression = 1;  // --png-compression: deflate level of PNG outputs
   std::string cache_dir;
   bool no_cache = false;
   bool json = false;
@@ -287,6 +289,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   outputs.colour = o.output;
   outputs.coords = o.coords;
   outputs.bits = o.bits;
+  outputs.png_compression = o.png_compression;
   if (o.blend_seams == "off") {
     outputs.blend_seams = false;
   } else if (o.blend_seams != "on") {
@@ -323,6 +326,16 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   }
   check_outputs(outputs, ex);
 
+  // PoCL's start-up (OpenCL platform, context, program from the binary cache) on a second thread
+  // while the exemplar and the cached analysis are read; the Synthesizer waits for it (the runtime
+  // is created under a lock). An error there is left for the Synthesizer to raise again; the
+  // future's destructor joins the thread on every path, errors included.
+  auto warm = std::async(std::launch::async, [] {
+    try {
+      warm_up();
+    } catch (...) {
+    }
+  });
   timing::mark("start-up, options");
   ex.colour = load_exemplar_image(o.exemplar);
   for (size_t i = 0; i < map_args.size(); ++i) ex.maps[i].image = load_exemplar_image(map_args[i].in);
@@ -462,6 +475,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--map-weight", o->map_weight, "Weight of the --apply maps in the matching (0 = colour only)")
       ->capture_default_str();
   cmd->add_option("--bits", o->bits, "Bit depth of PNG/TIFF output: 8 or 16 (default PNG 8, TIFF 16)");
+  cmd->add_option("--png-compression", o->png_compression,
+                  "Deflate level of PNG outputs, 0-9: 1 (default) is fast, 9 the smallest files (~3x slower to write)")
+      ->check(CLI::Range(0, 9));
   cmd->add_option("--cache-dir", o->cache_dir, "Folder for cached analyses (default $PROCTEX_CACHE_DIR/synth)");
   cmd->add_flag("--no-cache", o->no_cache, "Analyse again and do not cache");
   cmd->add_flag("--json", o->json, "Print what was synthesised as JSON");

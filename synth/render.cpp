@@ -76,11 +76,14 @@ Palette make_palette(const Image& src, PixelType type) {
 // place, the destructor removes an uncommitted temporary.
 class StripFile {
  public:
-  StripFile(fs::path target, int width, int height, PixelType file_format, bool linear) {
+  StripFile(fs::path target, int width, int height, PixelType file_format, bool linear, int png_level = 1) {
     WriteOptions options;
     options.file_type = file_format;
     options.colour_space = linear ? "Linear" : "sRGB";
-    if (ext_of(target) == ".png") options.png_compression_level = 1;
+    if (ext_of(target) == ".png") {
+      options.png_compression_level = png_level;
+      if (png_level == 1) options.png_filter = 0x10;  // libpng's PNG_FILTER_SUB (see RenderOutputs)
+    }
     writer_ = std::make_unique<StripWriter>(target, width, height, options);
   }
   void write(int y0, int rows, PixelType type, const void* data) { writer_->write_rows(y0, rows, type, data); }
@@ -339,7 +342,7 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
     Target tg;
     tg.palette = make_palette(src, t);
     tg.normal = normal;
-    tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == PixelType::Half);
+    tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == PixelType::Half, o.png_compression);
     targets.push_back(std::move(tg));
   };
   add(o.colour, ex.colour, false);

@@ -416,6 +416,8 @@ int passes_at(const Analysis& a, const SynthOptions& o, int level) {
   return o.passes[static_cast<size_t>(i)];
 }
 
+void warm_up() { ocl::Runtime::instance(); }
+
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
   auto& rt = ocl::Runtime::instance();
   timing::mark("OpenCL platform, context, queue");
