@@ -327,9 +327,9 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   check_outputs(outputs, ex);
 
   // PoCL's start-up (OpenCL platform, context, program from the binary cache) on a second thread
-  // while the exemplar and the cached analysis are read; the Synthesizer waits for it (the runtime
-  // is created under a lock). An error there is left for the Synthesizer to raise again; the
-  // future's destructor joins the thread on every path, errors included.
+  // while the exemplar and the cached analysis are read. Nothing may be printed on stderr until it
+  // is waited for (see warm_up()). An error there is left for the Synthesizer to raise again; the
+  // future's destructor joins the thread on every path, errors included (before main() prints).
   auto warm = std::async(std::launch::async, [] {
     try {
       warm_up();
@@ -347,6 +347,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                                                              : default_cache_dir();
   const Analysis analysis = analyse_cached(ex, aopt, cache);
   timing::mark(analysis.from_cache ? "analysis cache load (+ shifts, texels)" : "analysis (not cached)");
+  warm.wait();
   check_options(analysis, options);
   if (o.tileable && first_level(analysis, options) > 1 && !global.quiet && !o.json) {
     std::fprintf(stderr,

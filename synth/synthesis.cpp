@@ -416,7 +416,10 @@ int passes_at(const Analysis& a, const SynthOptions& o, int level) {
   return o.passes[static_cast<size_t>(i)];
 }
 
-void warm_up() { ocl::Runtime::instance(); }
+void warm_up() {
+  auto& rt = ocl::Runtime::instance();
+  if (!timing::enabled()) rt.program(kSource, "-cl-std=CL1.2");
+}
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
   auto& rt = ocl::Runtime::instance();

@@ -91,11 +91,13 @@ int first_level(const Analysis& analysis, const SynthOptions& options);
 // The correction passes at level l (first_level..L).
 int passes_at(const Analysis& analysis, const SynthOptions& options, int level);
 
-// Creates the process's OpenCL runtime (once per process; later calls return at once). The
-// command calls it on a second thread at start-up, so that PoCL's start-up (it loads LLVM and
-// clang: ~25 ms of CPU) overlaps reading the exemplar and the cached analysis. Thread-safe; throws
-// like the Synthesizer would. (The program is loaded by the Synthesizer on the calling thread:
-// loading a binary silences the process's stderr for a moment, which must not swallow messages.)
+// Creates the process's OpenCL runtime and loads the synthesis program (once per process; later
+// calls return at once). The command calls it on a second thread at start-up, so that PoCL's
+// start-up (it loads LLVM and clang: ~25 ms of CPU) overlaps reading the exemplar and the cached
+// analysis. Thread-safe; throws like the Synthesizer would. Loading a program binary silences the
+// process's stderr for ~3 ms (kernels/runtime.cpp): the caller must print nothing on stderr until
+// it has waited for this call. With PROCTEX_SYNTH_TIMING set (which prints from the calling thread
+// meanwhile) only the runtime is created here; the Synthesizer loads the program.
 void warm_up();
 
 // Holds the analysis on the device and the built program. One per analysis; not thread-safe.
