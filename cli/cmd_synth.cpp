@@ -35,6 +35,8 @@ struct SynthCliOptions {
   int refine_passes = synth::SynthOptions{}.refine_passes;
   int rematch_passes = synth::SynthOptions{}.rematch_passes;
   int layout_shifts = synth::SynthOptions{}.layout_shifts;
+  float break_pieces = synth::SynthOptions{}.break_pieces;
+  float layout_min_correlation = synth::SynthOptions{}.layout_min_correlation;
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
@@ -244,6 +246,8 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.refine_passes = o.refine_passes;
   options.rematch_passes = o.rematch_passes;
   options.layout_shifts = o.layout_shifts;
+  options.break_pieces = o.break_pieces;
+  options.layout_min_correlation = o.layout_min_correlation;
   options.kappa = o.kappa;
   if (o.tileable) {
     options.period_x = width;
@@ -376,6 +380,9 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"refine_seams", options.refine_passes},
                 {"rematch", options.rematch_passes},
                 {"layout_shifts", options.layout_shifts},
+                {"break_pieces", options.break_pieces},
+                {"layout_min_correlation", options.layout_min_correlation},
+                {"layout_shifts_used", layout_shift_count(analysis, options)},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
@@ -450,6 +457,14 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
                   "Shift the first level's blocks only by the exemplar's K most self-similar translations "
                   "(keeps rows and lattices aligned; 0 = any random shift)")
       ->capture_default_str()->check(CLI::Range(0, synth::kMaxShifts));
+  cmd->add_option("--layout-min-correlation", o->layout_min_correlation,
+                  "Use the layout shifts only when the exemplar correlates with itself under them at least this "
+                  "much on average (-1..1; stochastic exemplars get uniform random shifts; -1 = always)")
+      ->capture_default_str()->check(CLI::Range(-1.0f, 1.0f));
+  cmd->add_option("--break-pieces", o->break_pieces,
+                  "Probability (0..1) that a second-level block takes a further layout shift: cuts large "
+                  "verbatim copies of the exemplar into smaller pieces")
+      ->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));

@@ -61,6 +61,20 @@ struct SynthOptions {
   // only switches it on (r > 0) or off (r = 0); a jitter map turns it off where it is 0. 32: brick's
   // coherence 5.5 -> 4.0 and median completeness 6.8 -> 2.3 on the bench (8: more verbatim copying).
   int layout_shifts = 32;
+  // Breaking up large copied pieces (issue 13): at the second synthesised level (blocks of h_l / 2
+  // output pixels) a pixel takes a further layout shift (one of the same `layout_shifts`
+  // translations, its own hash draw) with this probability, so that two adjacent first-level
+  // blocks that happen to continue each other are cut into smaller pieces. 0 = off. Needs
+  // layout_shifts > 0; a jitter map turns it off where it is 0.
+  float break_pieces = 0.0f;
+  // The layout shifts are used only for a structured exemplar: when the mean correlation of the
+  // exemplar with itself under its first `layout_shifts` shifts (Analysis::shift_correlation) is
+  // at least this; otherwise the first level is jittered by uniform random shifts (as with
+  // layout_shifts = 0). On a stochastic exemplar the autocorrelation's peaks are weak and
+  // cluster (dirt: all near half the exemplar, which laid its one orange region out on a 128 px
+  // lattice). 0.2: of the bench's exemplars brick (0.43), pave (0.27) and planks (0.26) keep
+  // the shifts; dirt (-0.19), grass, lava, marble, pebbles, rock and wood (0.06-0.12) do not.
+  float layout_min_correlation = 0.2f;
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
   float kappa = 8.0f;
@@ -87,6 +101,10 @@ void check_options(const Analysis& analysis, const SynthOptions& options);
 // The coarsest level that is synthesised (levels below it are the constant 0): 1 normally; with a
 // period, the first level at which the period is still an even number of pixels.
 int first_level(const Analysis& analysis, const SynthOptions& options);
+
+// How many layout shifts the first level draws from (0 = uniform random shifts): layout_shifts,
+// at most the exemplar's, and 0 unless their mean correlation reaches layout_min_correlation.
+int layout_shift_count(const Analysis& analysis, const SynthOptions& options);
 
 // The correction passes at level l (first_level..L).
 int passes_at(const Analysis& analysis, const SynthOptions& options, int level);
