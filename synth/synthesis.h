@@ -67,14 +67,15 @@ struct SynthOptions {
   // blocks that happen to continue each other are cut into smaller pieces. 0 = off. Needs
   // layout_shifts > 0; a jitter map turns it off where it is 0.
   float break_pieces = 0.0f;
-  // The layout shifts are used only for a structured exemplar: when the mean correlation of the
-  // exemplar with itself under its first `layout_shifts` shifts (Analysis::shift_correlation) is
-  // at least this; otherwise the first level is jittered by uniform random shifts (as with
-  // layout_shifts = 0). On a stochastic exemplar the autocorrelation's peaks are weak and
-  // cluster (dirt: all near half the exemplar, which laid its one orange region out on a 128 px
-  // lattice). 0.2: of the bench's exemplars brick (0.43), pave (0.27) and planks (0.26) keep
-  // the shifts; dirt (-0.19), grass, lava, marble, pebbles, rock and wood (0.06-0.12) do not.
-  float layout_min_correlation = 0.2f;
+  // The layout shifts are used only when the mean correlation of the exemplar with itself under
+  // its first `layout_shifts` shifts (Analysis::shift_correlation) is at least this; otherwise
+  // the first level is jittered by uniform random shifts (as with layout_shifts = 0). 0: only an
+  // exemplar whose "peaks" are anti-correlated loses them - of the bench's exemplars only dirt
+  // (-0.19: its peaks all sat near half the exemplar and laid its one orange region out on a
+  // 128 px lattice); brick 0.43, pave 0.27, planks 0.26, the others 0.06-0.12. 0.2 (shifts for
+  // brick, pave and planks only) broke up the large pieces of the others but worsened 6 of their
+  // 7 coherences (grass 5.14 -> 5.31, marble 10.88 -> 11.48) and the completeness median.
+  float layout_min_correlation = 0.0f;
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
   float kappa = 8.0f;
