@@ -30,8 +30,8 @@ struct SynthCliOptions {
   int64_t seed = 1;
   std::string randomness = "1,0";
   std::string passes = "0,2";
-  // -1 = the default: 16 for one exemplar (issue 13, fifth pass: with the 4 px seam blend, bench
-  // median coherence 5.14 -> 5.08), 8 - the library's, kept by rgbn and the service - with --graph.
+  // -1 = the default: 32 for one exemplar (issue 13, fifth pass: with the 4 px seam blend, bench
+  // median coherence 5.14 -> 5.04), 8 - the library's, kept by rgbn and the service - with --graph.
   float kappa = -1.0f;
   int finest_passes = synth::SynthOptions{}.finest_passes;
   int refine_passes = synth::SynthOptions{}.refine_passes;
@@ -250,7 +250,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.layout_shifts = o.layout_shifts;
   options.break_pieces = o.break_pieces;
   options.layout_min_correlation = o.layout_min_correlation;
-  options.kappa = o.kappa >= 0 ? o.kappa : 16.0f;
+  options.kappa = o.kappa >= 0 ? o.kappa : 32.0f;
   if (o.tileable) {
     options.period_x = width;
     options.period_y = height;
@@ -470,7 +470,7 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
       ->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
   cmd->add_option("--coherence", o->kappa,
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces; "
-                  "default 16, 8 with --graph)")
+                  "default 32, 8 with --graph)")
       ->check(CLI::Range(0.0f, 100.0f));
   cmd->add_option("--jitter-map", o->jitter_map,
                   "Grey image scaling the randomness per output pixel (white = --randomness, black = none); it "
