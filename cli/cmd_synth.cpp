@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -29,11 +30,15 @@ struct SynthCliOptions {
   int64_t seed = 1;
   std::string randomness = "1,0";
   std::string passes = "0,2";
-  float kappa = 8.0f;
+  // -1 = the default: 32 for one exemplar (issue 13, fifth pass: with the 4 px seam blend, bench
+  // median coherence 5.14 -> 5.04), 8 - the library's, kept by rgbn and the service - with --graph.
+  float kappa = -1.0f;
   int finest_passes = synth::SynthOptions{}.finest_passes;
   int refine_passes = synth::SynthOptions{}.refine_passes;
   int rematch_passes = synth::SynthOptions{}.rematch_passes;
   int layout_shifts = synth::SynthOptions{}.layout_shifts;
+  float break_pieces = synth::SynthOptions{}.break_pieces;
+  float layout_min_correlation = synth::SynthOptions{}.layout_min_correlation;
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
@@ -43,6 +48,7 @@ struct SynthCliOptions {
   std::vector<std::string> apply;
   float map_weight = 0.5f;
   int bits = 0;
+  int png_compression = 1;  // --png-compression: deflate level of PNG outputs
   std::string cache_dir;
   bool no_cache = false;
   bool json = false;
@@ -144,7 +150,7 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
   options.randomness = parse_randomness(o.randomness);
   options.passes = parse_passes(o.passes);
   options.finest_passes = o.finest_passes;
-  options.kappa = o.kappa;
+  options.kappa = o.kappa >= 0 ? o.kappa : synth::SynthOptions{}.kappa;
   std::vector<StripTarget> files{{o.output, false}};
   if (!o.coords.empty()) files.push_back({o.coords, true});
   RenderOutputs check;
@@ -242,7 +248,9 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.refine_passes = o.refine_passes;
   options.rematch_passes = o.rematch_passes;
   options.layout_shifts = o.layout_shifts;
-  options.kappa = o.kappa;
+  options.break_pieces = o.break_pieces;
+  options.layout_min_correlation = o.layout_min_correlation;
+  options.kappa = o.kappa >= 0 ? o.kappa : 32.0f;
   if (o.tileable) {
     options.period_x = width;
     options.period_y = height;
@@ -287,6 +295,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   outputs.colour = o.output;
   outputs.coords = o.coords;
   outputs.bits = o.bits;
+  outputs.png_compression = o.png_compression;
   if (o.blend_seams == "off") {
     outputs.blend_seams = false;
   } else if (o.blend_seams != "on") {
@@ -298,6 +307,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
     outputs.blend_radius = b[0] - '0';
   } else {
     outputs.blend_seams = true;
+    outputs.blend_radius = 4;  // "on": the command's default width (see kappa above)
   }
   struct MapArg {
     std::string kind, in, out;
@@ -323,6 +333,16 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   }
   check_outputs(outputs, ex);
 
+  // PoCL's start-up (OpenCL platform, context, program from the binary cache) on a second thread
+  // while the exemplar and the cached analysis are read. Nothing may be printed on stderr until it
+  // is waited for (see warm_up()). An error there is left for the Synthesizer to raise again; the
+  // future's destructor joins the thread on every path, errors included (before main() prints).
+  auto warm = std::async(std::launch::async, [] {
+    try {
+      warm_up();
+    } catch (...) {
+    }
+  });
   timing::mark("start-up, options");
   ex.colour = load_exemplar_image(o.exemplar);
   for (size_t i = 0; i < map_args.size(); ++i) ex.maps[i].image = load_exemplar_image(map_args[i].in);
@@ -334,6 +354,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                                                              : default_cache_dir();
   const Analysis analysis = analyse_cached(ex, aopt, cache);
   timing::mark(analysis.from_cache ? "analysis cache load (+ shifts, texels)" : "analysis (not cached)");
+  warm.wait();
   check_options(analysis, options);
   if (o.tileable && first_level(analysis, options) > 1 && !global.quiet && !o.json) {
     std::fprintf(stderr,
@@ -362,6 +383,9 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"refine_seams", options.refine_passes},
                 {"rematch", options.rematch_passes},
                 {"layout_shifts", options.layout_shifts},
+                {"break_pieces", options.break_pieces},
+                {"layout_min_correlation", options.layout_min_correlation},
+                {"layout_shifts_used", layout_shift_count(analysis, options)},
                 {"coherence", options.kappa},
                 {"levels", analysis.levels},
                 {"tileable", o.tileable},
@@ -436,9 +460,18 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
                   "Shift the first level's blocks only by the exemplar's K most self-similar translations "
                   "(keeps rows and lattices aligned; 0 = any random shift)")
       ->capture_default_str()->check(CLI::Range(0, synth::kMaxShifts));
+  cmd->add_option("--layout-min-correlation", o->layout_min_correlation,
+                  "Use the layout shifts only when the exemplar correlates with itself under them at least this "
+                  "much on average (-1..1; stochastic exemplars get uniform random shifts; -1 = always)")
+      ->capture_default_str()->check(CLI::Range(-1.0f, 1.0f));
+  cmd->add_option("--break-pieces", o->break_pieces,
+                  "Probability (0..1) that a second-level block takes a further layout shift: cuts large "
+                  "verbatim copies of the exemplar into smaller pieces")
+      ->capture_default_str()->check(CLI::Range(0.0f, 1.0f));
   cmd->add_option("--coherence", o->kappa,
-                  "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces)")
-      ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
+                  "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces; "
+                  "default 32, 8 with --graph)")
+      ->check(CLI::Range(0.0f, 100.0f));
   cmd->add_option("--jitter-map", o->jitter_map,
                   "Grey image scaling the randomness per output pixel (white = --randomness, black = none); it "
                   "repeats over the plane from (0, 0)");
@@ -449,7 +482,7 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_flag("--tileable", o->tileable, "Make the output tile seamlessly with period --size");
   cmd->add_option("--blend-seams", o->blend_seams,
                   "on|off|N: ramp the colour (and --apply maps) across the joins between copied patches over N "
-                  "pixels on either side (on = 3); the coordinates (--coords) stay exact and inside a patch "
+                  "pixels on either side (on = 4); the coordinates (--coords) stay exact and inside a patch "
                   "the pixels are exact copies")
       ->capture_default_str();
   cmd->add_option("--exemplar-tiles", o->exemplar_tiles,
@@ -462,6 +495,9 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--map-weight", o->map_weight, "Weight of the --apply maps in the matching (0 = colour only)")
       ->capture_default_str();
   cmd->add_option("--bits", o->bits, "Bit depth of PNG/TIFF output: 8 or 16 (default PNG 8, TIFF 16)");
+  cmd->add_option("--png-compression", o->png_compression,
+                  "Deflate level of PNG outputs, 0-9: 1 (default) is fast, 9 the smallest files (~3x slower to write)")
+      ->check(CLI::Range(0, 9));
   cmd->add_option("--cache-dir", o->cache_dir, "Folder for cached analyses (default $PROCTEX_CACHE_DIR/synth)");
   cmd->add_flag("--no-cache", o->no_cache, "Analyse again and do not cache");
   cmd->add_flag("--json", o->json, "Print what was synthesised as JSON");

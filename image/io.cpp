@@ -294,7 +294,7 @@ StripWriter::StripWriter(const fs::path& path, int width, int height, const Writ
     }
     png::Header h{width, height, options.channels, options.file_type == PixelType::UInt16 ? 16 : 8};
     s.encoder = std::make_unique<png::Encoder>(s.file, nullptr, h, options.png_compression_level,
-                                               options.colour_space == "sRGB");
+                                               options.colour_space == "sRGB", options.png_filter);
   } else {
     std::string error;
     try {

@@ -41,6 +41,7 @@ struct WriteOptions {
   std::string colour_space;                // "sRGB", "Linear" or "" (recorded as metadata only)
   std::string compression;                 // e.g. "zip" (EXR), "jpeg:95" (JPEG); "" = default
   int png_compression_level = -1;          // zlib level 0-9 for PNG, -1 = libpng's default (6)
+  int png_filter = -1;  // PNG row filters: a libpng PNG_FILTER_* mask, -1 = libpng's adaptive choice
   std::vector<std::pair<std::string, std::string>> attributes;  // extra string metadata (EXR)
 };
 

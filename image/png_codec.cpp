@@ -94,13 +94,14 @@ bool guarded_read_end(png_structp png, png_infop info) {
   return true;
 }
 
-bool guarded_write_info(png_structp png, png_infop info, const Header* h, int level, bool srgb) {
+bool guarded_write_info(png_structp png, png_infop info, const Header* h, int level, bool srgb, int filter) {
   if (setjmp(png_jmpbuf(png))) return false;
   static const int kColour[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
                                  PNG_COLOR_TYPE_RGB_ALPHA};
   png_set_IHDR(png, info, png_uint_32(h->width), png_uint_32(h->height), h->bit_depth, kColour[h->channels],
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   if (level >= 0) png_set_compression_level(png, std::clamp(level, 0, 9));
+  if (filter >= 0) png_set_filter(png, PNG_FILTER_TYPE_BASE, filter);
   if (srgb) png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
   png_write_info(png, info);
   if (h->bit_depth == 16 && std::endian::native == std::endian::little) png_set_swap(png);
@@ -198,7 +199,8 @@ struct Encoder::State {
   }
 };
 
-Encoder::Encoder(std::FILE* file, std::vector<unsigned char>* memory, const Header& header, int level, bool srgb)
+Encoder::Encoder(std::FILE* file, std::vector<unsigned char>* memory, const Header& header, int level, bool srgb,
+                 int filter)
     : state_(std::make_unique<State>()) {
   State& s = *state_;
   s.header = header;
@@ -210,7 +212,7 @@ Encoder::Encoder(std::FILE* file, std::vector<unsigned char>* memory, const Head
     return;
   }
   png_set_write_fn(s.png, &s.context, write_bytes, flush_bytes);
-  if (!guarded_write_info(s.png, s.info, &s.header, level, srgb)) s.fail();
+  if (!guarded_write_info(s.png, s.info, &s.header, level, srgb, filter)) s.fail();
 }
 
 Encoder::~Encoder() = default;

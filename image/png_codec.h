@@ -37,8 +37,9 @@ std::string decode(const Source& source, const std::function<void(const Header&)
 // Streams a PNG out row by row: to a FILE (not closed) or, if `file` is null, to `memory`.
 class Encoder {
  public:
+  // `filter`: a PNG_FILTER_* mask of the row filters libpng may choose from, -1 = its default.
   Encoder(std::FILE* file, std::vector<unsigned char>* memory, const Header& header, int compression_level,
-          bool srgb);
+          bool srgb, int filter = -1);
   ~Encoder();
   Encoder(const Encoder&) = delete;
   Encoder& operator=(const Encoder&) = delete;

@@ -367,7 +367,7 @@ void save_cache(const std::filesystem::path& file, const Analysis& a) {
 
 // The most self-similar translations (Analysis::shifts): the autocorrelation of the mean-free
 // channels by FFT (Wiener-Khinchin), its local maxima away from 0, best first.
-std::vector<int32_t> self_similar_shifts(const Channels& ch) {
+std::vector<int32_t> self_similar_shifts(const Channels& ch, std::vector<float>& correlation) {
   namespace fd = metrics::detail;
   const int w = ch.width, h = ch.height, hw = w / 2 + 1;
   const size_t n = static_cast<size_t>(w) * h;
@@ -403,8 +403,10 @@ std::vector<int32_t> self_similar_shifts(const Channels& ch) {
     }
   std::sort(peaks.begin(), peaks.end());
   std::vector<int32_t> out;
+  correlation.clear();
   for (size_t k = 0; k < peaks.size() && out.size() < 2 * static_cast<size_t>(kMaxShifts); ++k) {
     const int x = peaks[k].second % w, y = peaks[k].second / w;
+    correlation.push_back(acf[0] > 0 ? static_cast<float>(-peaks[k].first / acf[0]) : 0.0f);
     out.push_back(x <= w / 2 ? x : x - w);
     out.push_back(y <= h / 2 ? y : y - h);
   }
@@ -412,7 +414,7 @@ std::vector<int32_t> self_similar_shifts(const Channels& ch) {
 }
 
 void fill_texels(const Channels& ch, Analysis& a) {
-  a.shifts = self_similar_shifts(ch);
+  a.shifts = self_similar_shifts(ch, a.shift_correlation);
   const size_t n = static_cast<size_t>(ch.width) * ch.height;
   a.texel_channels = ch.count;
   a.texels.resize(n * ch.count);

@@ -57,6 +57,9 @@ struct Analysis {
   // |t_x| >= w/8 or |t_y| >= h/8 so that a shift changes the content), best first, at most
   // kMaxShifts, as (dx, dy) pairs. Derived from the pixels on every load, like texels.
   std::vector<int32_t> shifts;
+  // The autocorrelation at each shift divided by that at 0 (1 = the exemplar is the same under
+  // the shift, about 0 = unrelated content), one per (dx, dy) pair of `shifts`.
+  std::vector<float> shift_correlation;
   double seconds = 0;    // analysis time (0 when loaded from the cache)
   bool from_cache = false;
 };

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <memory>
 #include <thread>
 
@@ -76,11 +77,14 @@ Palette make_palette(const Image& src, PixelType type) {
 // place, the destructor removes an uncommitted temporary.
 class StripFile {
  public:
-  StripFile(fs::path target, int width, int height, PixelType file_format, bool linear) {
+  StripFile(fs::path target, int width, int height, PixelType file_format, bool linear, int png_level = 1) {
     WriteOptions options;
     options.file_type = file_format;
     options.colour_space = linear ? "Linear" : "sRGB";
-    if (ext_of(target) == ".png") options.png_compression_level = 1;
+    if (ext_of(target) == ".png") {
+      options.png_compression_level = png_level;
+      if (png_level == 1) options.png_filter = 0x10;  // libpng's PNG_FILTER_SUB (see RenderOutputs)
+    }
     writer_ = std::make_unique<StripWriter>(target, width, height, options);
   }
   void write(int y0, int rows, PixelType type, const void* data) { writer_->write_rows(y0, rows, type, data); }
@@ -141,8 +145,9 @@ struct SeamBlend {
   }
 };
 
+// Blends output rows [ya, yb) of the strip (`rows` rows) into `out` (the whole strip's bytes).
 void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std::vector<int32_t>& P, int pw, int w,
-                 int rows, std::vector<unsigned char>& out) {
+                 int rows, std::vector<unsigned char>& out, int ya, int yb) {
   const size_t tb = pal.texel_bytes;
   const bool wide = pal.type == PixelType::UInt16, flt = pal.type == PixelType::Float;
   const double levels = wide ? 65535.0 : 255.0;
@@ -171,6 +176,8 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
   // equal, without the (2R + 1)^2 predictions. `join` marks a padded pixel that does not continue
   // the patch of its right or lower neighbour; `sum` is its summed-area table.
   const int R = sb.radius, ph = rows + 2 * R;
+  // The summed-area table covers the padded rows the output rows [ya, yb) read: [ya, yb + 2R].
+  const int sy0 = ya, sh = (yb - ya) + 2 * R;
   auto continues = [&](size_t a, size_t b, int dx, int dy) {  // S[b] = S[a] + (dx, dy) in the exemplar
     int ux = P[2 * b] - dx, uy = P[2 * b + 1] - dy;
     if (sb.toroidal) {
@@ -181,22 +188,23 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
     }
     return ux == P[2 * a] && uy == P[2 * a + 1];
   };
-  std::vector<int32_t> sum(static_cast<size_t>(pw + 1) * (ph + 1), 0);
-  for (int y = 0; y < ph; ++y) {
+  std::vector<int32_t> sum(static_cast<size_t>(pw + 1) * (sh + 1), 0);
+  for (int ly = 0; ly < sh; ++ly) {
+    const int y = sy0 + ly;
     int32_t row = 0;
     for (int x = 0; x < pw; ++x) {
       const size_t a = static_cast<size_t>(y) * pw + x;
       const bool join = (x + 1 < pw && !continues(a, a + 1, 1, 0)) || (y + 1 < ph && !continues(a, a + pw, 0, 1));
       row += join ? 1 : 0;
-      sum[static_cast<size_t>(y + 1) * (pw + 1) + x + 1] = sum[static_cast<size_t>(y) * (pw + 1) + x + 1] + row;
+      sum[static_cast<size_t>(ly + 1) * (pw + 1) + x + 1] = sum[static_cast<size_t>(ly) * (pw + 1) + x + 1] + row;
     }
   }
   auto joins_in_window = [&](int x, int y) {  // inner (x, y): padded window [x, x + 2R] x [y, y + 2R]
-    const size_t x0 = x, x1 = x + 2 * R + 1, y0 = y, y1 = y + 2 * R + 1;
+    const size_t x0 = x, x1 = x + 2 * R + 1, y0 = y - sy0, y1 = y - sy0 + 2 * R + 1;
     return sum[y1 * (pw + 1) + x1] - sum[y0 * (pw + 1) + x1] - sum[y1 * (pw + 1) + x0] + sum[y0 * (pw + 1) + x0];
   };
   // Every texel's channels as summed: the palette value, or the decoded normal component.
-  const size_t texels = pal.bytes.size() / tb;
+  const size_t texels = flt || normal ? pal.bytes.size() / tb : 0;  // 8/16-bit colour sums the codes
   std::vector<double> term(3 * texels);
   for (size_t t = 0; t < texels; ++t)
     for (int c = 0; c < 3; ++c) {
@@ -285,13 +293,14 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
   }
   };
   const int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
-  if (threads == 1 || static_cast<size_t>(w) * rows < 65536) {
-    blend_rows(0, rows);
+  const int n = yb - ya;
+  if (threads == 1 || static_cast<size_t>(w) * n < 16384) {
+    blend_rows(ya, yb);
     return;
   }
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t)
-    pool.emplace_back(blend_rows, rows * t / threads, rows * (t + 1) / threads);
+    pool.emplace_back(blend_rows, ya + n * t / threads, ya + n * (t + 1) / threads);
   for (auto& th : pool) th.join();
 }
 
@@ -339,7 +348,7 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
     Target tg;
     tg.palette = make_palette(src, t);
     tg.normal = normal;
-    tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == PixelType::Half);
+    tg.file = std::make_unique<StripFile>(path, win.width, win.height, t, t == PixelType::Half, o.png_compression);
     targets.push_back(std::move(tg));
   };
   add(o.colour, ex.colour, false);
@@ -376,7 +385,23 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
     for (auto& t : targets) {
       buffer.resize(n * t.palette.texel_bytes);
       if (R > 0) {
-        blend_strip(t.palette, t.normal, blend, P, win.width + 2 * R, win.width, rows, buffer);
+        // Blended in chunks of rows; each chunk is encoded and written on a second thread while the
+        // next one is blended (the writes stay in order: a chunk's write starts after the previous
+        // one's ended). The bytes do not depend on the chunks.
+        const int chunk = std::max(32, (rows + 7) / 8);
+        const size_t row_bytes = static_cast<size_t>(win.width) * t.palette.texel_bytes;
+        std::future<void> writing;
+        for (int c0 = 0; c0 < rows; c0 += chunk) {
+          const int c1 = std::min(rows, c0 + chunk);
+          blend_strip(t.palette, t.normal, blend, P, win.width + 2 * R, win.width, rows, buffer, c0, c1);
+          if (writing.valid()) writing.get();
+          writing = std::async(std::launch::async, [&t, &buffer, y0, c0, c1, row_bytes] {
+            t.file->write(y0 + c0, c1 - c0, t.palette.type, buffer.data() + static_cast<size_t>(c0) * row_bytes);
+          });
+        }
+        writing.get();
+        timing::mark("seam blend + encode + write rows");
+        continue;
       } else {
         for (size_t i = 0; i < n; ++i) {
           const size_t texel = static_cast<size_t>(S[2 * i + 1]) * ex.width() + S[2 * i];

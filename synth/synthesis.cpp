@@ -40,7 +40,8 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
                      global int2* S, int w, int h, long ox, long oy,
                      int spacing, int ew, int eh, long period_x, long period_y,
                      int rq, uint seed, uint level, global const uchar* jmap, int jw, int jh, int shift,
-                     global const long* pastes, int paste_count, global const int* shifts, int shift_count) {
+                     global const long* pastes, int paste_count, global const int* shifts, int shift_count,
+                     int shift_prob) {
   const int i = get_global_id(0), j = get_global_id(1);
   if (i >= w || j >= h) return;
   const long qx = ox + i, qy = oy + j;
@@ -56,10 +57,13 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
   const int scaled =
       jw == 0 ? rq : (int)(((long)rq * jmap[sy_wrapl(qy << shift, jh) * jw + sy_wrapl(qx << shift, jw)]) / 255);
   if (scaled > 0 && shift_count > 0) {
-    // One of the exemplar's most self-similar translations (structure-keeping layout jitter).
-    const uint k = sy_hash_pos(hx, hy, level, seed, 2) % (uint)shift_count;
-    jx = shifts[2 * k];
-    jy = shifts[2 * k + 1];
+    // One of the exemplar's most self-similar translations (structure-keeping layout jitter); below
+    // the first level only with probability shift_prob / 65536 (breaking up large pieces).
+    if (shift_prob >= 65536 || (int)(sy_hash_pos(hx, hy, level, seed, 3) & 0xffffU) < shift_prob) {
+      const uint k = sy_hash_pos(hx, hy, level, seed, 2) % (uint)shift_count;
+      jx = shifts[2 * k];
+      jy = shifts[2 * k + 1];
+    }
   } else if (scaled > 0) {
     const int Hx = (int)(sy_hash_pos(hx, hy, level, seed, 0) % 131073U) - 65536;
     const int Hy = (int)(sy_hash_pos(hx, hy, level, seed, 1) % 131073U) - 65536;
@@ -392,6 +396,10 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
   if (o.refine_passes < 0 || o.refine_passes > 8) throw UsageError("--refine-seams must be in [0, 8]");
   if (o.rematch_passes < 0 || o.rematch_passes > 8) throw UsageError("--rematch must be in [0, 8]");
+  if (!(o.layout_min_correlation >= -1 && o.layout_min_correlation <= 1))
+    throw UsageError(fmt::format("--layout-min-correlation must be in [-1, 1], got {}", o.layout_min_correlation));
+  if (!(o.break_pieces >= 0 && o.break_pieces <= 1))
+    throw UsageError(fmt::format("--break-pieces must be in [0, 1], got {}", o.break_pieces));
   if (o.layout_shifts < 0 || o.layout_shifts > kMaxShifts)
     throw UsageError(fmt::format("--layout-shifts must be in [0, {}]", kMaxShifts), "0 = uniform random shifts");
   if (o.period_x < 0 || o.period_y < 0 || o.period_x > (1 << 24) || o.period_y > (1 << 24))
@@ -409,11 +417,24 @@ int first_level(const Analysis& a, const SynthOptions& o) {
   return std::max(1, a.levels - tz + 1);
 }
 
+int layout_shift_count(const Analysis& a, const SynthOptions& o) {
+  const int n = std::min<int>(o.layout_shifts, static_cast<int>(std::min(a.shifts.size() / 2, a.shift_correlation.size())));
+  if (n <= 0) return 0;
+  double mean = 0;
+  for (int k = 0; k < n; ++k) mean += a.shift_correlation[static_cast<size_t>(k)];
+  return mean / n >= o.layout_min_correlation ? n : 0;
+}
+
 int passes_at(const Analysis& a, const SynthOptions& o, int level) {
   if (level == a.levels && o.finest_passes >= 0) return o.finest_passes;
   if (o.passes.empty()) return 0;
   const int i = std::clamp(level - first_level(a, o), 0, static_cast<int>(o.passes.size()) - 1);
   return o.passes[static_cast<size_t>(i)];
+}
+
+void warm_up() {
+  auto& rt = ocl::Runtime::instance();
+  if (!timing::enabled()) rt.program(kSource, "-cl-std=CL1.2");
 }
 
 Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device_(std::make_unique<Device>()) {
@@ -498,7 +519,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     // period allows), so the layout-changing first value is never skipped.
     const size_t ri = static_cast<size_t>(std::min<int>(l - l0, static_cast<int>(o.randomness.size()) - 1));
     const float rl = o.randomness[ri];
-    const cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
+    cl_int rq = static_cast<cl_int>(std::lround(rl * 65536.0));
     const cl_long period_x = o.period_x > 0 ? o.period_x >> (L - l) : 0;
     const cl_long period_y = o.period_y > 0 ? o.period_y >> (L - l) : 0;
     // A paste's coordinates at level l: S_l[q] = h_l q + (ex - out) + (c_l - c_L), where c is the
@@ -513,7 +534,12 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     }
     cl::Buffer paste_buffer = ocl::upload(paste_data);
     // Structure-keeping shifts at the first synthesised level only.
-    const int shift_count = l == l0 ? std::min<int>(o.layout_shifts, static_cast<int>(a.shifts.size() / 2)) : 0;
+    // ... and, with probability break_pieces, at the second (replacing its randomness value).
+    const int usable_shifts = layout_shift_count(a, o);
+    const bool breaking = l == l0 + 1 && o.break_pieces > 0 && usable_shifts > 0;
+    const int shift_count = l == l0 || breaking ? usable_shifts : 0;
+    const cl_int shift_prob = breaking ? static_cast<cl_int>(std::lround(o.break_pieces * 65536.0)) : 65536;
+    if (breaking) rq = 65536;
     std::vector<cl_int> shift_data(static_cast<size_t>(std::max(2, 2 * shift_count)), 0);  // never empty
     std::copy_n(a.shifts.begin(), 2 * shift_count, shift_data.begin());
     cl::Buffer shift_buffer = ocl::upload(shift_data);
@@ -524,7 +550,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                 static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), period_x, period_y, rq,
                 static_cast<cl_uint>(o.seed), static_cast<cl_uint>(l), jmap, static_cast<cl_int>(jw),
                 static_cast<cl_int>(jh), static_cast<cl_int>(L - l), paste_buffer,
-                static_cast<cl_int>(o.pastes.size()), shift_buffer, static_cast<cl_int>(shift_count));
+                static_cast<cl_int>(o.pastes.size()), shift_buffer, static_cast<cl_int>(shift_count), shift_prob);
     auto phase = [&](const char* what) {
       if (!timing::enabled()) return;
       ocl::finish();

@@ -61,6 +61,21 @@ struct SynthOptions {
   // only switches it on (r > 0) or off (r = 0); a jitter map turns it off where it is 0. 32: brick's
   // coherence 5.5 -> 4.0 and median completeness 6.8 -> 2.3 on the bench (8: more verbatim copying).
   int layout_shifts = 32;
+  // Breaking up large copied pieces (issue 13): at the second synthesised level (blocks of h_l / 2
+  // output pixels) a pixel takes a further layout shift (one of the same `layout_shifts`
+  // translations, its own hash draw) with this probability, so that two adjacent first-level
+  // blocks that happen to continue each other are cut into smaller pieces. 0 = off. Needs
+  // layout_shifts > 0; a jitter map turns it off where it is 0.
+  float break_pieces = 0.0f;
+  // The layout shifts are used only when the mean correlation of the exemplar with itself under
+  // its first `layout_shifts` shifts (Analysis::shift_correlation) is at least this; otherwise
+  // the first level is jittered by uniform random shifts (as with layout_shifts = 0). 0: only an
+  // exemplar whose "peaks" are anti-correlated loses them - of the bench's exemplars only dirt
+  // (-0.19: its peaks all sat near half the exemplar and laid its one orange region out on a
+  // 128 px lattice); brick 0.43, pave 0.27, planks 0.26, the others 0.06-0.12. 0.2 (shifts for
+  // brick, pave and planks only) broke up the large pieces of the others but worsened 6 of their
+  // 7 coherences (grass 5.14 -> 5.31, marble 10.88 -> 11.48) and the completeness median.
+  float layout_min_correlation = 0.0f;
   // Coherence bias (LH05's kappa): a k-coherence candidate must beat a coherent one (that grows
   // a patch) by this factor: distance * (1 + kappa). 0 = plain nearest neighbourhood.
   float kappa = 8.0f;
@@ -88,8 +103,21 @@ void check_options(const Analysis& analysis, const SynthOptions& options);
 // period, the first level at which the period is still an even number of pixels.
 int first_level(const Analysis& analysis, const SynthOptions& options);
 
+// How many layout shifts the first level draws from (0 = uniform random shifts): layout_shifts,
+// at most the exemplar's, and 0 unless their mean correlation reaches layout_min_correlation.
+int layout_shift_count(const Analysis& analysis, const SynthOptions& options);
+
 // The correction passes at level l (first_level..L).
 int passes_at(const Analysis& analysis, const SynthOptions& options, int level);
+
+// Creates the process's OpenCL runtime and loads the synthesis program (once per process; later
+// calls return at once). The command calls it on a second thread at start-up, so that PoCL's
+// start-up (it loads LLVM and clang: ~25 ms of CPU) overlaps reading the exemplar and the cached
+// analysis. Thread-safe; throws like the Synthesizer would. Loading a program binary silences the
+// process's stderr for ~3 ms (kernels/runtime.cpp): the caller must print nothing on stderr until
+// it has waited for this call. With PROCTEX_SYNTH_TIMING set (which prints from the calling thread
+// meanwhile) only the runtime is created here; the Synthesizer loads the program.
+void warm_up();
 
 // Holds the analysis on the device and the built program. One per analysis; not thread-safe.
 class Synthesizer {

@@ -275,6 +275,40 @@ TEST(SynthCli, SeamBlendWidthReachesNPixelsFromAJoin) {
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.png"));
 }
 
+// --png-compression only changes how the PNG is compressed (level 1 writes with the "sub" row
+// filter, the others with libpng's adaptive filters): the pixels are the same at every level and
+// bit depth, and the output is blended in several chunks of rows (160 rows: 5 chunks).
+TEST(SynthCli, PngCompressionLevelsKeepThePixels) {
+  TempDir dir;
+  const auto ex = make_exemplar(dir);
+  auto synth = [&](const std::string& out, const std::string& args) {
+    const auto r = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / out).string() +
+                                   "' --window 40,-70,120,160 " + args,
+                               dir.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r;
+  };
+  for (const std::string bits : {"8", "16"}) {
+    synth("l1.png", "--bits " + bits);
+    synth("l0.png", "--bits " + bits + " --png-compression 0");
+    synth("l9.png", "--bits " + bits + " --png-compression 9");
+    int w, h, c;
+    std::string f;
+    const auto one = raw_pixels(dir / "l1.png", w, h, c, f);
+    ASSERT_EQ(w, 120);
+    ASSERT_EQ(h, 160);
+    EXPECT_TRUE(one == raw_pixels(dir / "l0.png", w, h, c, f)) << bits;
+    EXPECT_TRUE(one == raw_pixels(dir / "l9.png", w, h, c, f)) << bits;
+    EXPECT_LT(std::filesystem::file_size(dir / "l1.png"), std::filesystem::file_size(dir / "l0.png")) << bits;
+  }
+  const auto bad = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "bad.png").string() +
+                                   "' --size 32 --png-compression 10",
+                               dir.path());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--png-compression"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.png"));
+}
+
 TEST(SynthCli, BadInputIsOneLineAndLeavesNoFile) {
   TempDir dir;
   const auto ex = make_exemplar(dir);

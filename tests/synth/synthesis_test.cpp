@@ -436,6 +436,59 @@ TEST(Synth, LayoutShiftsKeepTheRowsOfALatticeAligned) {
   EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
 }
 
+TEST(Synth, LayoutShiftsOnlyForAnExemplarThatResemblesItselfUnderThem) {
+  // The lattice's shifts are lattice vectors: the exemplar correlates strongly with itself under
+  // them, so the default threshold keeps all of them.
+  AnalysisOptions ao;
+  ao.tiling = Tiling::Toroidal;
+  const Analysis a = analyse(exemplar_of(lattice_exemplar()), ao);
+  ASSERT_EQ(a.shift_correlation.size(), a.shifts.size() / 2);
+  EXPECT_GT(a.shift_correlation[0], 0.5f);
+  SynthOptions o;
+  o.layout_shifts = 16;
+  EXPECT_EQ(layout_shift_count(a, o), 16);
+  o.layout_min_correlation = 0.99f;  // nothing is that self-similar on average: uniform shifts
+  EXPECT_EQ(layout_shift_count(a, o), 0);
+  // Shifts whose "peaks" are anti-correlated (dirt's, all near half the exemplar) are not used.
+  Analysis anti = a;
+  for (auto& c : anti.shift_correlation) c = -0.2f;
+  EXPECT_EQ(layout_shift_count(anti, SynthOptions{}), 0);
+  SynthOptions always;
+  always.layout_min_correlation = -1.0f;
+  EXPECT_EQ(layout_shift_count(anti, always), std::min<int>(always.layout_shifts, static_cast<int>(a.shifts.size() / 2)));
+  o.layout_min_correlation = 1.5f;
+  Synthesizer s(a);
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
+}
+
+TEST(Synth, BreakingPiecesChangesTheMapKeepsWindowsExactAndRowsAligned) {
+  AnalysisOptions ao;
+  ao.tiling = Tiling::Toroidal;
+  const Analysis a = analyse(exemplar_of(lattice_exemplar()), ao);
+  Synthesizer s(a);
+  const Window w{-5000, 777, 256, 192};
+  SynthOptions o;
+  o.layout_shifts = 16;
+  const auto plain = s.synthesise(w, o);
+  o.break_pieces = 0.5f;
+  const auto broken = s.synthesise(w, o);
+  EXPECT_NE(broken, plain);
+  for (const Window part : {Window{w.x + 3, w.y + 50, 61, 99}, Window{w.x + 200, w.y, 56, 1}})
+    EXPECT_EQ(s.synthesise(part, o), cut(broken, w, part)) << part.x << "," << part.y;
+  // The further shifts are lattice vectors too: the rows stay aligned.
+  std::map<int, long> phases;
+  for (int y = 0; y < w.height; ++y)
+    for (int x = 0; x < w.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * w.width + x;
+      ++phases[static_cast<int>(((broken[2 * i + 1] - (w.y + y)) % 16 + 16) % 16)];
+    }
+  long most = 0;
+  for (const auto& [phase, count] : phases) most = std::max(most, count);
+  EXPECT_GT(double(most) / (w.width * w.height), 0.9);
+  o.break_pieces = 1.5f;
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
+}
+
 TEST(Synth, OutputIsNeitherATilingNorNoise) {
   Synthesizer s(photo_analysis());
   const Window w{0, 0, 192, 192};
