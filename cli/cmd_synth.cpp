@@ -250,7 +250,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.layout_shifts = o.layout_shifts;
   options.break_pieces = o.break_pieces;
   options.layout_min_correlation = o.layout_min_correlation;
-  options.kappa = o.kappa >= 0 ? o.kappa : 32.0f;
+  options.kappa = o.kappa >= 0 ? o.kappa : synth::kSingleExemplarCoherence;
   if (o.tileable) {
     options.period_x = width;
     options.period_y = height;
@@ -307,7 +307,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
     outputs.blend_radius = b[0] - '0';
   } else {
     outputs.blend_seams = true;
-    outputs.blend_radius = 4;  // "on": the command's default width (see kappa above)
+    outputs.blend_radius = synth::kSingleExemplarBlendRadius;  // "on": the command's default width
   }
   struct MapArg {
     std::string kind, in, out;

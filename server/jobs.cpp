@@ -262,7 +262,7 @@ SynthJobOptions synth_options_from_json(const nlohmann::json& j, int max_size) {
     o.synth.passes = values;
   }
   o.synth.finest_passes = field<int>(j, "finest_passes", o.synth.finest_passes, -1, 8);
-  o.synth.kappa = static_cast<float>(field<double>(j, "coherence", o.synth.kappa, 0.0, 100.0));
+  o.synth.kappa = static_cast<float>(field<double>(j, "coherence", synth::kSingleExemplarCoherence, 0.0, 100.0));
   o.randomness_scale = field<double>(j, "randomness_scale", 1.0, 0.0, 4.0);
   if (j.contains("randomness") && !j["randomness"].is_null()) {
     const auto& r = j["randomness"];
@@ -722,6 +722,7 @@ nlohmann::json JobRunner::run_synth(const JobRecord& job, LiveJob& live) {
   synth::RenderOutputs outputs;
   outputs.colour = dir / "synth.png";
   outputs.blend_seams = o.blend_seams;
+  outputs.blend_radius = synth::kSingleExemplarBlendRadius;  // as `proctex synth`
   const synth::Window window{0, 0, o.width, o.height};
   // Strips of at most 1 M pixels: progress and a cancel between strips; the output does not depend
   // on the strips (spatial determinism).

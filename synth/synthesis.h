@@ -22,6 +22,13 @@ struct Window {
   int width = 0, height = 0;
 };
 
+// The defaults of a synthesis from one exemplar, by `proctex synth` and by the service's synth jobs
+// alike (the same request gives the same pixels): a stronger coherence with a 4 px seam blend
+// (issue 13, fifth pass: bench median coherence 5.14 -> 5.04, docs/synth.md). SynthOptions{} and
+// RenderOutputs{} keep the library's 8 and 3 for rgbn and for graphs.
+inline constexpr float kSingleExemplarCoherence = 32.0f;
+inline constexpr int kSingleExemplarBlendRadius = 4;
+
 struct SynthOptions {
   uint32_t seed = 1;
   // Jitter strength r_l per synthesised level, coarse to fine (from first_level() to L: levels 1..L
