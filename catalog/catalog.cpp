@@ -432,6 +432,18 @@ MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs, cons
   return report;
 }
 
+void require_current_sources(Store& store, const ShaderLibrary& library) {
+  std::string changed;
+  for (const auto& s : store.shaders()) {
+    const ShaderDecl* decl = library.find(s.name);
+    if (decl && decl->source_hash != s.source_hash) changed += (changed.empty() ? "" : ", ") + s.name;
+  }
+  if (!changed.empty())
+    throw Error("catalogue '" + store.path().string() + "' is stale: the source of " + changed +
+                    " changed since it was built",
+                "rebuild the changed shaders (the others are kept): proctex catalog build --db " + store.path().string());
+}
+
 nlohmann::json info(const fs::path& db, const ShaderLibrary& library) {
   Store store(db, Store::Access::Read);
   nlohmann::json j = {{"db", db.string()}, {"schema_version", store.schema_version()}, {"shaders", nlohmann::json::array()}};

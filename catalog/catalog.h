@@ -120,6 +120,12 @@ struct MergeOptions {
 MergeReport merge(const std::filesystem::path& out, const std::vector<std::filesystem::path>& inputs,
                   const MergeOptions& options = {});
 
+// Throws proctex::Error naming every shader of the catalogue whose source changed since it was
+// built (its stored samples are parameter vectors of another version of the shader: using them
+// would silently mix versions), with the command that rebuilds just those. Shaders no longer in
+// the library are ignored (match never uses them).
+void require_current_sources(Store& store, const ShaderLibrary& library = ShaderLibrary::builtin());
+
 // Per shader: samples, pruned size, coverage, build time, staleness against the current library.
 nlohmann::json info(const std::filesystem::path& db, const ShaderLibrary& library = ShaderLibrary::builtin());
 

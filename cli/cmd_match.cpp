@@ -141,6 +141,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   if (!std::filesystem::exists(db))
     throw Error("no catalogue at '" + db.string() + "'", "build one: proctex catalog build --db " + db.string());
   catalog::Store store(db, catalog::Store::Access::Read);
+  catalog::require_current_sources(store);
 
   g_interrupted = false;
   auto previous = std::signal(SIGINT, on_interrupt);

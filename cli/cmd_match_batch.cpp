@@ -235,6 +235,7 @@ void run_match_batch(const std::string& input, const std::string& crop, const st
   const fs::path db = db_arg.empty() ? catalog::default_catalog_path() : fs::path(db_arg);
   if (!fs::exists(db)) throw Error("no catalogue at '" + db.string() + "'", "build one: proctex catalog build --db " + db.string());
   catalog::Store store(db, catalog::Store::Access::Read);
+  catalog::require_current_sources(store);
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (!fs::is_directory(out_dir))

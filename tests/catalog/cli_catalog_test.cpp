@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <map>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -189,6 +190,47 @@ TEST_F(CatalogCli, NewerSchemaRefusedByEveryCommand) {
   expect_clean_error(run("catalog build --db " + path("c.sqlite") + " --shaders checker" + kTiny), 1, "newer");
   expect_clean_error(run("catalog info --db " + path("c.sqlite")), 1, "newer");
   expect_clean_error(run("catalog verify --db " + path("c.sqlite")), 1, "newer");
+}
+
+// A shader edited after the build: `catalog build` rebuilds it alone, and until then `match` refuses
+// the catalogue instead of mixing the old version's samples with the new shader (issue 12).
+TEST_F(CatalogCli, EditedShaderIsRebuiltAloneAndMatchRefusesTheStaleCatalogue) {
+  fs::create_directories(dir / "mine");
+  const auto write_shader = [&](const char* gain) {
+    std::ofstream(dir / "mine" / "mine_bands.cl")
+        << "// @shader \"bands for a test\"\n// @param float size = 0.5 [0.1, 1] \"band size\"\n"
+           "float3 shade(float2 p, float fw, uint seed, const Params P) {\n"
+           "  return (float3)(" << gain << "f * pt_fract(p.x * 4.0f / P.size));\n}\n";
+  };
+  write_shader("0.5");
+  const std::string env = "PROCTEX_SHADER_PATH='" + (dir / "mine").string() + "' ";
+  const std::string bin = env + "'" + PROCTEX_BINARY + "'";
+  const std::string build = bin + " catalog build --db " + path("cat.sqlite") + " --shaders checker,mine_bands" + kTiny;
+  ASSERT_EQ(std::system((build + " >/dev/null 2>&1").c_str()), 0);
+  ASSERT_EQ(run("render checker -o " + path("photo.png") + " --size 64").exit_code, 0);
+
+  write_shader("0.7");  // the user edits the shader
+  const int rc = std::system((bin + " match " + path("photo.png") + " --db " + path("cat.sqlite") + " >" +
+                              path("out.txt") + " 2>" + path("err.txt")).c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 1);
+  const std::string err = testing::read_text(path("err.txt"));
+  EXPECT_EQ(err.rfind("proctex: error: ", 0), 0u) << err;
+  EXPECT_EQ(testing::line_count(err), 1) << err;
+  EXPECT_NE(err.find("stale"), std::string::npos) << err;
+  EXPECT_NE(err.find("mine_bands"), std::string::npos) << err;
+  EXPECT_EQ(err.find("checker"), std::string::npos) << err;  // unchanged shaders are not blamed
+
+  ASSERT_EQ(std::system((build + " --json >" + path("build.json") + " 2>/dev/null").c_str()), 0);
+  const auto report = nlohmann::json::parse(testing::read_text(path("build.json")));
+  std::map<std::string, std::string> status;
+  for (const auto& s : report["shaders"]) status[s["shader"]] = s["status"];
+  EXPECT_EQ(status["mine_bands"], "rebuilt") << report.dump();
+  EXPECT_EQ(status["checker"], "skipped") << report.dump();
+  const int info = std::system((bin + " catalog info --db " + path("cat.sqlite") + " --json >" + path("info.json") +
+                                " 2>/dev/null").c_str());
+  ASSERT_EQ(WEXITSTATUS(info), 0);
+  for (const auto& s : nlohmann::json::parse(testing::read_text(path("info.json")))["shaders"])
+    EXPECT_FALSE(s["stale"].get<bool>()) << s.dump();
 }
 
 }  // namespace
