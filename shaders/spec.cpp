@@ -158,7 +158,9 @@ TextureSpec TextureSpec::from_json(const json& j) {
 
 TextureSpec parse_spec_argument(const std::string& argument) {
   namespace fs = std::filesystem;
-  if (argument.ends_with(".json") || (fs::exists(argument) && fs::is_regular_file(argument))) {
+  // error_code: an inline spec longer than a file name may be (255 bytes) is not a file, not an error.
+  std::error_code ec;
+  if (argument.ends_with(".json") || fs::is_regular_file(argument, ec)) {
     std::ifstream in(argument);
     if (!in) throw Error("cannot read spec file '" + argument + "'", "check the path");
     try {

@@ -30,6 +30,16 @@ TEST(Spec, InlineArgument) {
   EXPECT_EQ(packed, (std::vector<float>{0.5f, 3, 0.1f, 0.2f, 0.3f, 2, 0}));
 }
 
+TEST(Spec, InlineArgumentLongerThanAFileNameIsParsed) {
+  // A match result's every parameter written inline is easily over 255 bytes, the longest file
+  // name: checking whether it names a file must not fail ("File name too long").
+  std::string arg = "sample:size=0.5,count=3,tint=(0.100000001, 0.200000003, 0.300000012),mode=rough";
+  while (arg.size() < 400) arg += ",flip=false";
+  const TextureSpec s = parse_spec_argument(arg);
+  EXPECT_EQ(s.shader, "sample");
+  EXPECT_EQ(resolve(sample_decl(), s), (std::vector<float>{0.5f, 3, 0.1f, 0.2f, 0.3f, 2, 0}));
+}
+
 TEST(Spec, BareNameUsesDefaults) {
   const TextureSpec s = parse_spec_argument("sample");
   EXPECT_TRUE(s.params.empty());
