@@ -9,21 +9,11 @@
 namespace proctex::metrics {
 
 std::vector<float> PixelMetric::compute(const Analysis& analysis) const {
-  const int n = analysis.size;
-  if (n % size_ != 0)
-    throw Error("the pixel metric needs an analysis resolution that is a multiple of " + std::to_string(size_),
-                "use a multiple of the metric's size");
-  const int f = n / size_;
+  const Image rgb = resize(analysis.rgb, size_, size_);
   const size_t plane = size_t(size_) * size_;
   std::vector<float> out(3 * plane);
-  for (int y = 0; y < size_; ++y)
-    for (int x = 0; x < size_; ++x)
-      for (int c = 0; c < 3; ++c) {
-        double sum = 0;
-        for (int dy = 0; dy < f; ++dy)
-          for (int dx = 0; dx < f; ++dx) sum += analysis.rgb.pixel(x * f + dx, y * f + dy)[c];
-        out[c * plane + size_t(y) * size_ + x] = static_cast<float>(sum / (f * f));
-      }
+  for (size_t i = 0; i < plane; ++i)
+    for (int c = 0; c < 3; ++c) out[c * plane + i] = rgb.pixels[3 * i + c];
   return out;
 }
 
@@ -43,18 +33,31 @@ double PixelMetric::rms(double similarity) const {
   return std::sqrt(std::max(0.0, -std::log(similarity)) * scale());
 }
 
+std::vector<float> moved_target(const Image& target, int dx, int dy, std::vector<uint8_t>& mask) {
+  const int n = target.width;
+  std::vector<float> wanted(3 * size_t(n) * n, 0.0f);
+  mask.assign(size_t(n) * n, 0);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const int rx = x + dx, ry = y + dy;  // the render's pixel that matches target(x, y)
+      if (rx < 0 || ry < 0 || rx >= n || ry >= n) continue;
+      std::copy_n(target.pixel(x, y), 3, &wanted[3 * (size_t(ry) * n + rx)]);
+      mask[size_t(ry) * n + rx] = 1;
+    }
+  return wanted;
+}
+
 Features PixelMetric::target_features(const Image& target, int dx, int dy) const {
   if (target.width != size_ || target.height != size_)
     throw Error("the pixel metric's target must be " + std::to_string(size_) + " px square",
                 "resize the target to the metric's size first");
+  std::vector<uint8_t> mask;
+  const auto moved = moved_target(target, dx, dy, mask);
   const size_t plane = size_t(size_) * size_;
   Features f{id(), version(), size_, std::vector<float>(3 * plane, std::numeric_limits<float>::quiet_NaN())};
-  for (int y = 0; y < size_; ++y)
-    for (int x = 0; x < size_; ++x) {
-      const int rx = x + dx, ry = y + dy;  // the render's pixel that matches target(x, y)
-      if (rx < 0 || ry < 0 || rx >= size_ || ry >= size_) continue;
-      for (int c = 0; c < 3; ++c) f.values[c * plane + size_t(ry) * size_ + rx] = target.pixel(x, y)[c];
-    }
+  for (size_t i = 0; i < plane; ++i)
+    if (mask[i])
+      for (int c = 0; c < 3; ++c) f.values[c * plane + i] = moved[3 * i + c];
   return f;
 }
 

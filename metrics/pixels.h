@@ -12,6 +12,9 @@
 // Distance: the mean squared RGB difference over the pixels both images define (squared, so that
 // log similarity is quadratic near the optimum, where BOBYQA's models are exact). Symmetric; 0 for
 // equal images. Not registered as a named metric: it is not a texture similarity.
+#include <cstdint>
+#include <vector>
+
 #include "image/image.h"
 #include "metrics/metric.h"
 
@@ -26,7 +29,7 @@ class PixelMetric final : public Metric {
   int version() const override { return 1; }
   std::string summary() const override { return "RGB RMS difference at a fixed registration (exact patterns)"; }
   std::size_t feature_size() const override { return 3 * std::size_t(size_) * size_; }
-  // Linear RGB planes area-averaged to size x size (the analysis resolution must be a multiple).
+  // Linear RGB planes, the analysis resized area-correctly to size x size.
   std::vector<float> compute(const Analysis& analysis) const override;
   // Mean squared RGB difference over the entries finite in both (1 when none is: nothing in
   // common). rms() is its square root.
@@ -44,5 +47,10 @@ class PixelMetric final : public Metric {
  private:
   int size_;
 };
+
+// `target` (square) moved the same way, as interleaved RGB the side of the target: the render's
+// pixel (x + dx, y + dy) gets target(x, y); `mask` (one byte per pixel) marks the pixels the moved
+// target covers, the others are 0.
+std::vector<float> moved_target(const Image& target, int dx, int dy, std::vector<uint8_t>& mask);
 
 }  // namespace proctex::metrics

@@ -931,11 +931,13 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // similarity, that finalist is chosen instead, however likely the selection finds the first
   // one's material: the selection can be sure and wrong (a knit render: P(grass) 0.96, grass S 0.135
   // against knit's 0.599).
+  const auto pixel_exact = [](const Candidate& c) { return c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse; };
+  const auto visibly_other = [&](const Candidate& c) {
+    return pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
+  };
   const auto score_of = [&](const Candidate& c) {
-    const bool pixel_exact = c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse;
-    const bool visibly_other = pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
-    return pixel_exact ? 2e6 - c.image_rmse
-           : pattern && c.similarity >= kCertainMatch && !visibly_other
+    return pixel_exact(c) ? 2e6 - c.image_rmse
+           : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
                : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
   };
@@ -954,8 +956,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     result.similarity = c.similarity;
     result.polish = c.polish;
     result.image_rmse = c.image_rmse;
-    result.pixel_exact = c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse;
-    result.visibly_other = pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
+    result.pixel_exact = pixel_exact(c);
+    result.visibly_other = visibly_other(c);
     result.outclassed = outclassed;
     result.per_metric.clear();
     if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))

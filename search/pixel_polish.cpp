@@ -47,30 +47,14 @@ std::vector<Start> polish_starts(const ShaderDecl& decl, const std::vector<float
 }
 
 
-// The target's pixels where a render at the shader's origin has them: render(x + dx, y + dy) ~
-// target(x, y); `mask` marks the render's pixels the moved target covers.
-std::vector<float> moved_target(const Image& target, int dx, int dy, std::vector<uint8_t>& mask) {
-  const int n = target.width;
-  std::vector<float> wanted(3 * size_t(n) * n, 0.0f);
-  mask.assign(size_t(n) * n, 0);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      const int rx = x + dx, ry = y + dy;
-      if (rx < 0 || ry < 0 || rx >= n || ry >= n) continue;
-      std::copy_n(target.pixel(x, y), 3, &wanted[3 * (size_t(ry) * n + rx)]);
-      mask[size_t(ry) * n + rx] = 1;
-    }
-  return wanted;
-}
-
-// The RGB RMS difference of `packed`'s render against the moved target (one render).
-double render_rmse(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed, const Image& target,
-                   int dx, int dy, Renderer& renderer) {
-  const metrics::PixelMetric pixels(target.width);
+// The RGB RMS difference of `packed`'s render against the target's features for its registration
+// (PixelMetric::target_features; one render).
+double render_rmse(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
+                   const metrics::PixelMetric& pixels, const metrics::Features& target, Renderer& renderer) {
   RenderSettings settings;
-  settings.width = settings.height = target.width;
+  settings.width = settings.height = pixels.size();
   const Image render = renderer.render_batch(decl, {packed}, std::vector<uint32_t>{seed}, settings).front();
-  return std::sqrt(pixels.distance(pixels.target_features(target, dx, dy).values, pixels.features(render, target.width).values));
+  return std::sqrt(pixels.distance(target.values, pixels.features(render, pixels.size()).values));
 }
 
 struct ProjectedContext {
@@ -156,13 +140,12 @@ std::vector<float> projected_polish(const ShaderDecl& decl, const std::vector<fl
 // All continuous parameters, colours included, by BOBYQA on the plain pixel difference: for a
 // shader whose colours are not linear (its basis would lie).
 std::vector<float> joint_polish(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
-                                const std::vector<std::string>& kept, const Image& target, int dx, int dy,
-                                Renderer& renderer, long budget, long& used) {
-  const int side = target.width;
-  const metrics::PixelMetric pixels(side);
+                                const std::vector<std::string>& kept, const metrics::PixelMetric& pixels,
+                                const metrics::Features& target_features, Renderer& renderer, long budget,
+                                long& used) {
+  const int side = pixels.size();
   const ParameterSpace space(decl, packed, kept);
   if (space.dimensions() == 0) return packed;
-  const metrics::Features target_features = pixels.target_features(target, dx, dy);
   Objective objective(space, target_features, pixels, renderer, seed, side);
   objective.set_budget({budget, 0.0});
   RefineOptions options;
@@ -187,23 +170,25 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
                                                    nlohmann::json& entry) {
   const int side = target.width;
   std::vector<uint8_t> mask;
-  const auto wanted = moved_target(target, dx, dy, mask);
-  const double start_rmse = render_rmse(decl, packed, seed, target, dx, dy, renderer);
+  const auto wanted = metrics::moved_target(target, dx, dy, mask);
+  const metrics::PixelMetric pixels(side);
+  const metrics::Features target_features = pixels.target_features(target, dx, dy);
+  const double start_rmse = render_rmse(decl, packed, seed, pixels, target_features, renderer);
   used += 1;
   std::vector<std::string> shape_pinned = kept;
   for (const auto& p : decl.params)
     if (p.type == ParamType::Color) shape_pinned.push_back(p.name);
   // Is the colour model exact here? Fit once and compare its residual with a render's.
   const auto first = fit_colours_to_pixels(decl, packed, seed, pinned, wanted, mask, side, renderer);
-  const double first_rmse = render_rmse(decl, first.packed, seed, target, dx, dy, renderer);
+  const double first_rmse = render_rmse(decl, first.packed, seed, pixels, target_features, renderer);
   used += first.renders + 1;
   const bool linear = std::fabs(first_rmse - std::sqrt(first.mse)) <= 1e-4 + 0.01 * first_rmse;
   entry["method"] = linear ? "colours projected" : "joint";
   std::vector<float> end =
       linear ? projected_polish(decl, first.packed, seed, pinned, shape_pinned, wanted, mask, side, renderer,
                                 std::max<long>(0, budget - used), used)
-             : joint_polish(decl, packed, seed, kept, target, dx, dy, renderer, std::max<long>(0, budget - used), used);
-  double end_rmse = render_rmse(decl, end, seed, target, dx, dy, renderer);
+             : joint_polish(decl, packed, seed, kept, pixels, target_features, renderer, std::max<long>(0, budget - used), used);
+  double end_rmse = render_rmse(decl, end, seed, pixels, target_features, renderer);
   used += 1;
   if (first_rmse < end_rmse) {
     end = first.packed;
