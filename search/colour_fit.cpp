@@ -9,6 +9,7 @@
 
 #include "image/image.h"
 #include "metrics/aligned.h"
+#include "metrics/pixels.h"
 
 namespace proctex::search {
 namespace {
@@ -155,17 +156,8 @@ std::vector<float> registered_pixels(const ColourTarget& target, const Image& re
   const metrics::AlignedMetric aligned(target.resolution);
   const auto [dx, dy] = aligned.best_shift(aligned.features(target.rgb, target.resolution).values,
                                            aligned.features(render, target.resolution).values);
-  const int n = target.resolution;
-  std::vector<float> wanted(3 * size_t(n) * n, 0.0f);
-  overlap.assign(size_t(n) * n, 0);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      const int tx = x + dx, ty = y + dy;
-      if (tx < 0 || ty < 0 || tx >= n || ty >= n) continue;
-      std::copy_n(target.rgb.pixel(tx, ty), 3, &wanted[3 * (size_t(y) * n + x)]);
-      overlap[size_t(y) * n + x] = 1;
-    }
-  return wanted;
+  // best_shift: render(x) ~ target(x + (dx, dy)); moved_target's convention is the opposite.
+  return metrics::moved_target(target.rgb, -dx, -dy, overlap);
 }
 
 }  // namespace
