@@ -60,7 +60,7 @@ inline constexpr double kVisiblyOtherRmse = 0.015;
 // selection's prior can be sure and wrong on a render (a knit target: P(grass) 0.96, grass S 0.135
 // against knit's 0.599). Re-scored offline on stored match JSONs (docs/match-evaluation.md,
 // session 9): on the 32 non-pattern labelled report photos no choice changes for any ratio from 2
-// up (1.5 loses one); on session 8's 53 synthetic targets 1.5 to 2.5 make knit right; on 53 targets
+// up (1.5 loses one); on session 8's 53 synthetic targets 1.5 to 2.5 make sand right (knit too, in the run); on 53 targets
 // of another seed nothing changes.
 inline constexpr double kOutclassedRatio = 2.25;
 // The final choice among the finalists maximises log S + kSelectionWeight * log P(shader): the
