@@ -131,7 +131,14 @@ Analysis prepare_analysis(const Image& image, int resolution) {
   an.lightness.resize(n);
   const float* p = an.rgb.pixels.data();
   for (size_t i = 0; i < n; ++i) {
-    linear_rgb_to_lab(p[3 * i], p[3 * i + 1], p[3 * i + 2], an.L[i], an.a[i], an.b[i]);
+    // A pattern's flat regions repeat one colour pixel after pixel: the cube roots are skipped.
+    if (i > 0 && p[3 * i] == p[3 * i - 3] && p[3 * i + 1] == p[3 * i - 2] && p[3 * i + 2] == p[3 * i - 1]) {
+      an.L[i] = an.L[i - 1];
+      an.a[i] = an.a[i - 1];
+      an.b[i] = an.b[i - 1];
+    } else {
+      linear_rgb_to_lab(p[3 * i], p[3 * i + 1], p[3 * i + 2], an.L[i], an.a[i], an.b[i]);
+    }
     an.lightness[i] = an.L[i] * 0.01f;
   }
   return an;

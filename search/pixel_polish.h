@@ -27,9 +27,13 @@ namespace proctex::search {
 // Points that register farther than this from the target are not polished: the pixels are only
 // informative once the shape lines up (measured: the align stage's right answers end below 0.011).
 inline constexpr double kPixelPolishStartRmse = 0.05;
+// At the shader's own origin, after a least-squares colour fit, a start may be farther: only there
+// can the parameters be the target's, and a duty off by a quarter of its range moves the pattern's
+// phase (wavy stripes: RMS 0.076 at the origin, the truth one scan away).
+inline constexpr double kPixelPolishOriginStartRmse = 0.1;
 // Renders per polished start (a 9-parameter swirl converges in about 300), and for the whole polish.
-inline constexpr long kPixelPolishEvaluations = 500;
-inline constexpr long kPixelPolishBudget = 1200;
+inline constexpr long kPixelPolishEvaluations = 600;
+inline constexpr long kPixelPolishBudget = 1500;
 
 struct PixelPolishResult {
   std::vector<float> packed;

@@ -242,4 +242,35 @@ RefineResult refine(Objective& objective, std::vector<double> start, const Refin
   return result;
 }
 
+RefineResult scan_coordinates(Objective& objective, std::vector<double> start, int levels, int rounds) {
+  const auto& dims = objective.space().dims();
+  const long first_evaluation = objective.evaluations();
+  RefineResult result;
+  result.unit = objective.space().snap(start);
+  result.similarity = objective.evaluate(result.unit);
+  for (int round = 0; round < rounds && !objective.exhausted(); ++round) {
+    bool moved = false;
+    for (size_t i = 0; i < dims.size() && !objective.exhausted(); ++i) {
+      if (dims[i].levels || dims[i].param->type != ParamType::Float) continue;
+      std::vector<std::vector<double>> candidates;
+      for (int k = 0; k < levels; ++k) {
+        auto p = result.unit;
+        p[i] = levels > 1 ? double(k) / (levels - 1) : 0.5;
+        candidates.push_back(p);
+      }
+      const auto values = objective.evaluate(candidates);
+      const auto best = std::max_element(values.begin(), values.end()) - values.begin();
+      if (values[best] > result.similarity) {
+        result.similarity = values[best];
+        result.unit = candidates[best];
+        moved = true;
+      }
+    }
+    ++result.passes;
+    if (!moved) break;
+  }
+  result.evaluations = objective.evaluations() - first_evaluation;
+  return result;
+}
+
 }  // namespace proctex::search

@@ -41,4 +41,12 @@ struct RefineResult {
 
 RefineResult refine(Objective& objective, std::vector<double> start, const RefineOptions& options = {});
 
+// A global line search along each continuous scalar (Float) parameter in turn: `levels` evenly
+// spaced values across its whole range with the others held, the best kept, for `rounds` passes
+// (fewer when a pass moves nothing). Every candidate of a pass renders in one launch per
+// parameter. It never returns a worse point than `start`. For what a local search cannot leave:
+// a stripe pattern's waviness frequency, whose spectral sidebands only meet the target's near the
+// true spacing, so the objective is flat or falling everywhere between.
+RefineResult scan_coordinates(Objective& objective, std::vector<double> start, int levels, int rounds);
+
 }  // namespace proctex::search

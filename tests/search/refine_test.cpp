@@ -1,7 +1,10 @@
 // Local refinement recovers the parameters of deterministic targets, whole values included.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/error.h"
+#include "metrics/magnitude.h"
 #include "search/refine.h"
 #include "shaders/library.h"
 #include "shaders/spec.h"
@@ -76,4 +79,49 @@ TEST(Refine, EveryOptimizerImprovesOnItsStart) {
 }
 
 }  // namespace
+}  // namespace proctex::search
+
+namespace proctex::search {
+
+TEST(ScanCoordinates, FindsAStripePatternsWavinessWhereTheLocalSearchStops) {
+  // Wavy stripes (a deterministic benchmark target): the waviness shows in the Fourier magnitude
+  // (blurred, as the coarse polish compares it) as sidebands that meet the target's only near the
+  // true wave frequency, so a local search from strongly waved stripes at the wrong frequency
+  // stays there. A line scan across each parameter's whole range finds the sidebands.
+  const std::string truth = "stripes:stripes=52,angle=52,duty=0.26,softness=0.88,wave=0.3,wave_frequency=2.76";
+  Fixture f(truth);
+  const metrics::MagnitudeMetric magnitude(kResolution, 2.0);  // blurred by 2 bins, as match.cpp's coarse polish
+  RenderSettings s;
+  s.width = s.height = kResolution;
+  const auto target = magnitude.features(f.renderer.render(parse_spec_argument(truth), s), kResolution);
+  auto start = resolve(f.decl, parse_spec_argument(truth));
+  start[f.decl.find("wave")->offset] = 0.9f;
+  start[f.decl.find("wave_frequency")->offset] = 1.0f;
+  std::vector<std::string> pinned;
+  for (const auto& p : f.decl.params)
+    if (p.name != "wave" && p.name != "wave_frequency") pinned.push_back(p.name);
+  const ParameterSpace space(f.decl, start, pinned);
+  ASSERT_EQ(space.dimensions(), 2);
+  const auto value = [&](const RefineResult& r, const std::string& name) {
+    return space.to_packed(r.unit)[f.decl.find(name)->offset];
+  };
+
+  Objective local(space, target, magnitude, f.renderer, 0, kResolution);
+  const RefineResult stuck = refine(local, space.to_unit(start), {});
+  EXPECT_GT(std::fabs(value(stuck, "wave_frequency") - 2.76f), 0.3f) << "the local search alone found it";
+
+  Objective scanned_objective(space, target, magnitude, f.renderer, 0, kResolution);
+  const RefineResult scanned = scan_coordinates(scanned_objective, space.to_unit(start), 48, 2);
+  EXPECT_NEAR(value(scanned, "wave_frequency"), 2.76f, 0.5f);  // within the sidebands' reach
+  EXPECT_GT(scanned.similarity, stuck.similarity);
+  // From there the local search on the exact magnitude (match.cpp's next stage) reaches the truth.
+  const metrics::MagnitudeMetric exact(kResolution);
+  const auto exact_target = exact.features(f.renderer.render(parse_spec_argument(truth), s), kResolution);
+  Objective exact_objective(space, exact_target, exact, f.renderer, 0, kResolution);
+  const RefineResult refined = refine(exact_objective, scanned.unit, {});
+  EXPECT_NEAR(value(refined, "wave_frequency"), 2.76f, 0.1f);
+  EXPECT_NEAR(value(refined, "wave"), 0.3f, 0.03f);
+  EXPECT_LE(scanned.evaluations, 1 + 2 * 2 * 48);
+}
+
 }  // namespace proctex::search
