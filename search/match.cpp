@@ -176,7 +176,8 @@ constexpr int kPolishSweepLevels = 64;
 constexpr int kScanLevels = 48;
 constexpr int kScanRounds = 2;
 constexpr long kScanRefineEvaluations = 120;
-constexpr long kSettleEvaluations = 80;  // the settle's renders (default metric, counts pinned)
+constexpr long kSettleEvaluations = 80;
+constexpr double kPolishStopRmse = 3e-4;  // a polished finalist this exact ends the other polishes  // the settle's renders (default metric, counts pinned)
 // The align stage's renders (registered pixels, metrics/aligned.h; counts and colours pinned).
 constexpr long kAlignEvaluations = 300;
 constexpr int kAlignMirrorPairDims = 6;  // up to this many dimensions, pairs are mirrored too
@@ -719,9 +720,18 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   for (const auto& lane : lanes) lane_ends.push_back({lane.decl, lane.space->to_packed(lane.refined.unit)});
   const size_t finalist_count = final_candidates.size();
   std::set<const ShaderDecl*> polished_shaders;
+  // Once a polished shader reproduces the target pixel for pixel, the other finalists' polishes
+  // (each up to ~2500 renders) cannot beat it: they are skipped. The bar is far below
+  // kPixelExactRmse, where a near-equivalent shader (a rounded rectangle for a superellipse, RMS
+  // 0.002) must not stop the right one's polish.
+  double exact_polish_rmse = -1;
   for (size_t i = 0; i < finalist_count; ++i) {
     const Refined& rf = *final_candidates[i].from;
     if (polished_shaders.count(rf.decl)) continue;
+    if (exact_polish_rmse >= 0 && exact_polish_rmse <= kPolishStopRmse) {
+      result.starts[i]["polish"] = {{"skipped", "another finalist's polish reproduces the target exactly"}};
+      continue;
+    }
     size_t best_of_shader = i;
     for (size_t k = 0; k < finalist_count; ++k)
       if (final_candidates[k].from->decl == rf.decl &&
@@ -730,6 +740,12 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     polished_shaders.insert(rf.decl);
     const Refined& base = *final_candidates[best_of_shader].from;
     nlohmann::json polish = {{"peakiness", peakiness}};
+    // Wall seconds per stage (JSON polish.seconds): where a pattern's match spends its time.
+    auto lap_start = Clock::now();
+    const auto lap = [&](const char* stage) {
+      polish["seconds"][stage] = seconds_since(lap_start);
+      lap_start = Clock::now();
+    };
     // What is left of an evaluation budget (--budget N): the polish never overspends it.
     const long budget_left = o.budget.max_evaluations > 0 ? o.budget.max_evaluations - evaluations : o.polish_evaluations;
     if (o.polish_evaluations <= 0 || budget_left <= 10 || (stop && *stop)) continue;
@@ -771,11 +787,13 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       const auto coarse_scan = scan_pattern(coarse, c, coarse_options, o.budget, evaluations, stop);
       evaluations += coarse.evaluations();
       polish["coarse"] = {{"evaluations", coarse.evaluations()}, {"similarity", c.similarity}, {"scan", coarse_scan}};
+      lap("coarse");
       lane_points.insert(lane_points.begin(), own);
       own = c.unit;
     }
     const auto r = polish_pattern(objective, own, lane_points, options, polish);
     evaluations += objective.evaluations();
+    lap("exact");
     // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form
     // colour fit (colour_fit.h) then sets the free colours from the target's colour statistics.
     const std::vector<float> polished = space.to_packed(r.unit);
@@ -882,6 +900,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         names.push_back("aligned_similarity");
       }
     }
+    lap("settle_align");
     auto images = renderer.render_batch(*base.decl, tries, std::vector<uint32_t>(tries.size(), base.seed), full);
     evaluations += static_cast<long>(tries.size());
     // 6. Pixel polish (pixel_polish.h): from the try that registers best, the plain RGB
@@ -918,6 +937,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         }
       }
     }
+    lap("pixel");
     double best_s = final_candidates[best_of_shader].similarity;
     int kept = -1;
     std::vector<metrics::Features> features;
@@ -959,6 +979,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (kept >= 0) polish["kept_point"] = names[kept];
     // Kept only if the default similarity agrees that it is better than the shader's finalists,
     // or if it is pixel-exact.
+    if (kept >= 0 && kept_rmse >= 0 && (exact_polish_rmse < 0 || kept_rmse < exact_polish_rmse))
+      exact_polish_rmse = kept_rmse;
     if (kept >= 0) {
       final_candidates.push_back({&base, tries[kept], best_s, std::move(features[kept]), polish, kept_rmse});
       if (pattern)
