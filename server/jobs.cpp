@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "catalog/catalog.h"
 #include "catalog/store.h"
 #include "core/error.h"
 #include "kernels/runtime.h"
@@ -536,6 +537,7 @@ nlohmann::json JobRunner::run_match(const JobRecord& job, LiveJob& live) {
   if (!fs::exists(options_.catalog))
     throw Error("no catalogue at '" + options_.catalog.string() + "'", "start the server with --db CATALOG");
   catalog::Store store(options_.catalog, catalog::Store::Access::Read);
+  catalog::require_current_sources(store);  // it may have changed since the job was accepted
 
   Renderer renderer;
   auto last_preview = Clock::now() - std::chrono::hours(1);

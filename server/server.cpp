@@ -266,6 +266,18 @@ struct Server::Impl {
       throw HttpError{503, "the server has no catalogue", "start it with --db CATALOG (proctex catalog build)"};
   }
 
+  // A match against samples of another version of a shader's source would silently search the
+  // old shader (as the CLI refuses it, catalog::require_current_sources): 409 before any job runs.
+  void require_current_catalog() {
+    require_catalog();
+    try {
+      catalog::Store catalogue(options.catalog, catalog::Store::Access::Read);
+      catalog::require_current_sources(catalogue);
+    } catch (const Error& e) {
+      throw HttpError{409, e.what(), e.hint()};
+    }
+  }
+
   JobRecord job_or_404(const std::string& id) {
     auto j = store->get(id);
     if (!j) throw HttpError{404, "no job '" + id + "'", "list jobs with GET /api/jobs"};
@@ -532,7 +544,7 @@ struct Server::Impl {
   }
 
   void create_match(const httplib::Request& req, httplib::Response& res) {
-    require_catalog();
+    require_current_catalog();
     json match_opts = json::object();
     const std::string* photo = upload_field(req, "photo");
     std::string raw;
