@@ -305,12 +305,12 @@ namespace proctex::search {
 PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                      const std::vector<std::string>& pinned, const std::vector<float>& wanted,
                                      const std::vector<uint8_t>& mask, int side, Renderer& renderer,
-                                     bool clamp_colours) {
+                                     bool clamp_colours, bool zero_offset) {
   const auto colours = free_colours(decl, pinned);
   const size_t k = colours.size();
   // Per colour its grey basis alone, then all free colours black (the offset).
   std::vector<std::vector<float>> batch;
-  for (size_t white = 0; white <= k; ++white) {
+  for (size_t white = 0; white <= k - (zero_offset && k > 0 ? 1 : 0); ++white) {
     auto p = packed;
     for (size_t j = 0; j < k; ++j)
       for (int ch = 0; ch < 3; ++ch) p[colours[j]->offset + ch] = j == white ? kBasisLevel : 0.0f;
@@ -320,7 +320,12 @@ PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<f
   settings.width = settings.height = side;
   const auto images = renderer.render_batch(decl, batch, std::vector<uint32_t>(batch.size(), seed), settings);
   LinearModel model;
-  model.offset = images[k];
+  if (images.size() > k) {
+    model.offset = images[k];
+  } else {
+    model.offset = images[0];
+    std::fill(model.offset.pixels.begin(), model.offset.pixels.end(), 0.0f);
+  }
   for (size_t j = 0; j < k; ++j) {
     Image w = images[j];
     for (size_t i = 0; i < w.pixels.size(); ++i) w.pixels[i] = (w.pixels[i] - model.offset.pixels[i]) / kBasisLevel;
@@ -333,6 +338,7 @@ PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<f
   PixelColourFit fit;
   fit.packed = packed;
   fit.renders = static_cast<long>(batch.size());
+  fit.offset_black = std::all_of(model.offset.pixels.begin(), model.offset.pixels.end(), [](float v) { return v == 0.0f; });
   const auto solved = k ? model.solve(wanted, &mask, clamp_colours) : std::vector<double>{};
   for (size_t j = 0; j < k; ++j)
     for (int ch = 0; ch < 3; ++ch)

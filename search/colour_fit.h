@@ -65,15 +65,19 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
 // `clamp_colours` false: `mse` is that of the unconstrained least-squares colours (smooth in the
 // shape, so a local search is not caught where a colour leaves its range on the way); `packed`
 // always holds colours clamped into their ranges.
+// `zero_offset`: the caller knows the render with every free colour black is black (a shader
+// that mixes its colours, as a two-colour pattern does: `offset_black` of an earlier fit of the
+// same shader said so), and that render is skipped - a third of a two-colour fit's renders.
 struct PixelColourFit {
   std::vector<float> packed;
   double mse = 1.0;
   long renders = 0;
+  bool offset_black = false;  // the render with every free colour black was black
 };
 PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                      const std::vector<std::string>& pinned, const std::vector<float>& wanted,
                                      const std::vector<uint8_t>& mask, int side, Renderer& renderer,
-                                     bool clamp_colours = true);
+                                     bool clamp_colours = true, bool zero_offset = false);
 
 // Renders fit_colours spends for `starts` starting points of `decl`.
 long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts);

@@ -71,14 +71,18 @@ struct ProjectedContext {
   long renders = 0, budget = 0;
   double best_mse = 1e300;
   std::vector<float> best_packed;
+  bool zero_offset = false;  // fit_colours_to_pixels: the first fit's offset render was black
 };
 
 double projected_objective(unsigned n, const double* x, double*, void* data) {
   auto& c = *static_cast<ProjectedContext*>(data);
   if (c.renders >= c.budget) throw nlopt::forced_stop();
   const auto fit = fit_colours_to_pixels(*c.decl, c.shape->to_packed(std::vector<double>(x, x + n)), c.seed, *c.pinned,
-                                         *c.wanted, *c.mask, c.side, *c.renderer, false);
+                                         *c.wanted, *c.mask, c.side, *c.renderer, false, c.zero_offset);
   c.renders += fit.renders;
+  // A shader that mixes its colours renders black with them all black, whatever its shape: the
+  // offset render is skipped from then on (the polished end point is checked by a render).
+  if (c.renders == fit.renders) c.zero_offset = fit.offset_black;
   if (fit.mse < c.best_mse) {
     c.best_mse = fit.mse;
     c.best_packed = fit.packed;
