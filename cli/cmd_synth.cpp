@@ -29,7 +29,7 @@ struct SynthCliOptions {
   std::string window;
   int64_t seed = 1;
   std::string randomness = "1,0";
-  std::string passes = "0,2";
+  std::string passes = "0,0,2";
   // -1 = the default: 32 for one exemplar (issue 13, fifth pass: with the 4 px seam blend, bench
   // median coherence 5.14 -> 5.04), 8 - the library's, kept by rgbn and the service - with --graph.
   float kappa = -1.0f;

@@ -246,86 +246,102 @@ int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |
 // T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
 // multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
 // as the channel-by-channel loop).
-kernel void sy_rematch(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
-                       global const short8* T, global const int* C1, int ew, int eh, int toroidal, int kmode) {
-  const int i = get_global_id(0), j = get_global_id(1);
-  if (i >= w || j >= h) return;
-  const int2 s0 = Sin[(long)j * w + i];
-  S[(long)j * w + i] = s0;
-  if (!sy_in_class(ox + i, oy + j, parity)) return;
-  // Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep.
-  int inside = 1;
-  for (int e = 0; e < 9 && inside; ++e) {
-    const int ni = clamp(i + e % 3 - 1, 0, w - 1), nj = clamp(j + e / 3 - 1, 0, h - 1);
-    const int2 c = Sin[(long)nj * w + ni];
-    int ux = c.x - (ni - i), uy = c.y - (nj - j);
-    if (toroidal) { ux = sy_step(ux, ew); uy = sy_step(uy, eh); }
-    inside = ux == s0.x && uy == s0.y;
-  }
-  if (inside) return;
-  int2 cand[18];
-  int n = 0;
-  cand[n++] = s0;
-  for (int e = 0; e < 9; ++e) {
-    const int ex = e % 3 - 1, ey = e / 3 - 1;
-    const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1);
-    const int2 c = Sin[(long)nj * w + ni];
-    for (int kk = 0; kk < 2; ++kk) {
-      if (kk == 0 && ex == 0 && ey == 0) continue;
-      if (kk == 1 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue;
-      int ux = c.x, uy = c.y;
-      if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
-      ux -= ni - i;
-      uy -= nj - j;
-      if (toroidal) {
-        ux = sy_step(ux, ew);
-        uy = sy_step(uy, eh);
-      } else if (ux < 3 || uy < 3 || ux >= ew - 3 || uy >= eh - 3) {
-        continue;  // its 7x7 would leave a bounded exemplar
-      }
-      int dup = 0;
-      for (int k = 0; k < n; ++k) dup |= (cand[k].x == ux && cand[k].y == uy);
-      if (!dup) cand[n++] = (int2)(ux, uy);
-    }
-  }
-  if (n == 1) return;
-  // The texels the synthesis has around p.
-  int8 ref[48];
-  int t = 0;
-  for (int dy = -3; dy <= 3; ++dy) {
-    const int nj = clamp(j + dy, 0, h - 1);
-    for (int dx = -3; dx <= 3; ++dx) {
-      if (dx == 0 && dy == 0) continue;
-      const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)];
-      ref[t++] = convert_int8(T[(long)q.y * ew + q.x]);
-    }
-  }
-  int2 best = s0;
-  int bestd = 0x7fffffff;
-  for (int k = 0; k < n; ++k) {
-    const int cx = cand[k].x, cy = cand[k].y;
-    // Away from a bounded exemplar's border (every candidate but possibly s0) no mirroring is needed.
-    const int plain = toroidal || (cx >= 3 && cy >= 3 && cx < ew - 3 && cy < eh - 3);
-    int d = 0;
-    t = 0;
-    for (int dy = -3; dy <= 3 && d < bestd; ++dy) {
-      const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh);
-      global const short8* row = T + (long)uy * ew;
-      int8 acc = (int8)(0);
-      for (int dx = -3; dx <= 3; ++dx) {
-        if (dx == 0 && dy == 0) continue;
-        const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew);
-        const int8 e = ref[t++] - convert_int8(row[ux]);
-        acc += e * e;
-      }
-      const int4 a4 = acc.lo + acc.hi;
-      const int2 a2 = a4.lo + a4.hi;
-      d += a2.x + a2.y;
-    }
-    if (d < bestd) { bestd = d; best = cand[k]; }
-  }
-  S[(long)j * w + i] = best;
+#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM) \
+kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
+                       global const VT* T, global const int* C1, int ew, int eh, int toroidal, int kmode) { \
+  const int i = get_global_id(0), j = get_global_id(1); \
+  if (i >= w || j >= h) return; \
+  const int2 s0 = Sin[(long)j * w + i]; \
+  S[(long)j * w + i] = s0; \
+  if (!sy_in_class(ox + i, oy + j, parity)) return; \
+  /*  Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep. */ \
+  int inside = 1; \
+  for (int e = 0; e < 9 && inside; ++e) { \
+    const int ni = clamp(i + e % 3 - 1, 0, w - 1), nj = clamp(j + e / 3 - 1, 0, h - 1); \
+    const int2 c = Sin[(long)nj * w + ni]; \
+    int ux = c.x - (ni - i), uy = c.y - (nj - j); \
+    if (toroidal) { ux = sy_step(ux, ew); uy = sy_step(uy, eh); } \
+    inside = ux == s0.x && uy == s0.y; \
+  } \
+  if (inside) return; \
+  int2 cand[18]; \
+  int n = 0; \
+  cand[n++] = s0; \
+  for (int e = 0; e < 9; ++e) { \
+    const int ex = e % 3 - 1, ey = e / 3 - 1; \
+    const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1); \
+    const int2 c = Sin[(long)nj * w + ni]; \
+    for (int kk = 0; kk < 2; ++kk) { \
+      if (kk == 0 && ex == 0 && ey == 0) continue; \
+      if (kk == 1 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
+      int ux = c.x, uy = c.y; \
+      if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; } \
+      ux -= ni - i; \
+      uy -= nj - j; \
+      if (toroidal) { \
+        ux = sy_step(ux, ew); \
+        uy = sy_step(uy, eh); \
+      } else if (ux < 3 || uy < 3 || ux >= ew - 3 || uy >= eh - 3) { \
+        continue;  /*  its 7x7 would leave a bounded exemplar */ \
+      } \
+      int dup = 0; \
+      for (int k = 0; k < n; ++k) dup |= (cand[k].x == ux && cand[k].y == uy); \
+      if (!dup) cand[n++] = (int2)(ux, uy); \
+    } \
+  } \
+  if (n == 1) return; \
+  /*  The texels the synthesis has around p. */ \
+  IT ref[48]; \
+  int t = 0; \
+  for (int dy = -3; dy <= 3; ++dy) { \
+    const int nj = clamp(j + dy, 0, h - 1); \
+    for (int dx = -3; dx <= 3; ++dx) { \
+      if (dx == 0 && dy == 0) continue; \
+      const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)]; \
+      ref[t++] = CONVERT(T[(long)q.y * ew + q.x]); \
+    } \
+  } \
+  int2 best = s0; \
+  int bestd = 0x7fffffff; \
+  for (int k = 0; k < n; ++k) { \
+    const int cx = cand[k].x, cy = cand[k].y; \
+    /*  Away from a bounded exemplar's border (every candidate but possibly s0) no mirroring is needed. */ \
+    const int plain = toroidal || (cx >= 3 && cy >= 3 && cx < ew - 3 && cy < eh - 3); \
+    const int inner_x = cx >= 3 && cx < ew - 3; \
+    int d = 0; \
+    t = 0; \
+    for (int dy = -3; dy <= 3 && d < bestd; ++dy) { \
+      const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh); \
+      global const VT* row = T + (long)uy * ew; \
+      IT acc = (IT)(0); \
+      if (inner_x) { \
+        /*  The common case: the row does not wrap, no index arithmetic per tap. */ \
+        global const VT* r = row + cx; \
+        for (int dx = -3; dx <= 3; ++dx) { \
+          if (dx == 0 && dy == 0) continue; \
+          const IT e = ref[t++] - CONVERT(r[dx]); \
+          acc += e * e; \
+        } \
+      } else { \
+        for (int dx = -3; dx <= 3; ++dx) { \
+          if (dx == 0 && dy == 0) continue; \
+          const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew); \
+          const IT e = ref[t++] - CONVERT(row[ux]); \
+          acc += e * e; \
+        } \
+      } \
+      d += HSUM(acc); \
+    } \
+    if (d < bestd) { bestd = d; best = cand[k]; } \
+  } \
+  S[(long)j * w + i] = best; \
 }
+int sy_hsum8(int8 a) { const int4 a4 = a.lo + a.hi; const int2 a2 = a4.lo + a4.hi; return a2.x + a2.y; }
+int sy_hsum4(int4 a) { const int2 a2 = a.lo + a.hi; return a2.x + a2.y; }
+// Up to 8 channels as short8; colour alone (3 channels) as short4: half the loads and lanes, the
+// same sums (the padding lanes are zero).
+SY_REMATCH(sy_rematch, short8, int8, convert_int8, sy_hsum8)
+SY_REMATCH(sy_rematch4, short4, int4, convert_int4, sy_hsum4)
 )CL";
 
 struct Region {
@@ -353,7 +369,7 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 struct Synthesizer::Device {
   cl::Program program;
-  cl::Kernel upsample, correct, refine, rematch;
+  cl::Kernel upsample, correct, refine, rematch, rematch4;
   cl::Buffer texels;
   int texel_channels = 0;
   struct Level {
@@ -446,16 +462,19 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->correct = cl::Kernel(device_->program, "sy_correct");
     device_->refine = cl::Kernel(device_->program, "sy_refine");
     device_->rematch = cl::Kernel(device_->program, "sy_rematch");
+    device_->rematch4 = cl::Kernel(device_->program, "sy_rematch4");
     return 0;
   });
   timing::mark("program build / binary cache load");
   if (!analysis.texels.empty()) {
-    // The re-match compares the first 8 channels: one zero-padded short8 per texel.
+    // The re-match compares the first 8 channels: one zero-padded short8 per texel, or short4 when
+    // there are at most 4 (colour alone).
     const int C = analysis.texel_channels;
+    const int lanes = C <= 4 ? 4 : 8;
     const size_t n = analysis.texels.size() / static_cast<size_t>(C);
-    std::vector<int16_t> t8(n * 8, 0);
+    std::vector<int16_t> t8(n * lanes, 0);
     for (size_t i = 0; i < n; ++i)
-      for (int c = 0; c < std::min(C, 8); ++c) t8[i * 8 + c] = analysis.texels[i * C + c];
+      for (int c = 0; c < std::min(C, lanes); ++c) t8[i * lanes + c] = analysis.texels[i * C + c];
     device_->texels = ocl::upload(t8);
     device_->texel_channels = C;
   }
@@ -586,7 +605,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
           static_cast<cl_int>(a.toroidal ? 1 : 0));
       if (o.refine_passes > 0) phase("seam refinement");
-      run(dev.rematch, rematch, dev.texels, lv.coherent,
+      run(dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch, rematch, dev.texels, lv.coherent,
           static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
           static_cast<cl_int>(kRematchCoherence));
     }

@@ -41,8 +41,10 @@ struct SynthOptions {
   // Correction passes (each 4 sub-passes) per synthesised level, coarse to fine like randomness
   // (one value applies to every level; a shorter list repeats its last value). Default: none at
   // the first level (there the correction pulled the jittered blocks back to the plain tiling, a
-  // visible lattice), 2 below.
-  std::vector<int> passes = {0, 2};
+  // visible lattice), none at the second either (issue 13, session 10: its correction merged the
+  // first level's blocks into copies of up to 3.5 exemplars - brick, marble and wood looked like the
+  // exemplar shifted; bench median coherence 5.04 -> 5.05, largest piece 0.47 -> 0.34), 2 below.
+  std::vector<int> passes = {0, 0, 2};
   // Passes at the finest level (the most pixels), overriding `passes` there; -1 = as `passes`.
   // 1 (issue 13, fourth pass): with two re-match passes after it, a second correction pass changed
   // no bench measure by more than 0.02 and cost ~12 ms CPU of a 512^2 run (docs/synth.md).

@@ -489,6 +489,67 @@ TEST(Synth, BreakingPiecesChangesTheMapKeepsWindowsExactAndRowsAligned) {
   EXPECT_THROW(s.synthesise({0, 0, 8, 8}, o), UsageError);
 }
 
+// Pieces copied verbatim: regions of 4-connected pixels copying the exemplar with one offset (S - p
+// modulo the m x m exemplar). Returns the largest piece and the area-weighted mean piece (the size
+// of the piece a random pixel lies in), both in pixels.
+std::pair<long, double> copied_pieces(const std::vector<int32_t>& S, int w, int h, int m) {
+  std::vector<int> offset(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      offset[i] = ((S[2 * i] - x) % m + m) % m + m * (((S[2 * i + 1] - y) % m + m) % m);
+    }
+  std::vector<char> seen(offset.size(), 0);
+  long largest = 0;
+  double weighted = 0;
+  for (size_t s0 = 0; s0 < offset.size(); ++s0) {
+    if (seen[s0]) continue;
+    std::vector<size_t> stack{s0};
+    seen[s0] = 1;
+    long n = 0;
+    while (!stack.empty()) {
+      const size_t c = stack.back();
+      stack.pop_back();
+      ++n;
+      const int x = static_cast<int>(c % w), y = static_cast<int>(c / w);
+      const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+      for (const auto& q : nb) {
+        if (q[0] < 0 || q[1] < 0 || q[0] >= w || q[1] >= h) continue;
+        const size_t k = static_cast<size_t>(q[1]) * w + q[0];
+        if (!seen[k] && offset[k] == offset[c]) seen[k] = 1, stack.push_back(k);
+      }
+    }
+    largest = std::max(largest, n);
+    weighted += double(n) * n;
+  }
+  return {largest, weighted / offset.size()};
+}
+
+TEST(Synth, CopiedPiecesStaySmallerThanTheExemplar) {
+  // The output must be a new arrangement, not regions of the exemplar tiled. On a brick-like
+  // lattice (whose layout shifts continue each other) a pixel of a 512^2 output lies, on average
+  // over 4 seeds, in a verbatim piece of at most 0.35 of the exemplar, and the largest piece is
+  // smaller than the exemplar on average (0.25 and 0.85 in session 10). With a correction at the
+  // second level (issue 13's sessions 3-9) the blocks merged: 0.49 and 1.52 here, 3.5 exemplars in
+  // one piece on the bench's brick photo.
+  AnalysisOptions ao;
+  ao.tiling = Tiling::Toroidal;
+  const Analysis a = analyse(exemplar_of(lattice_exemplar()), ao);
+  Synthesizer s(a);
+  const double area = double(a.width) * a.height;
+  double largest = 0, mean = 0;
+  for (uint32_t seed : {1u, 2u, 3u, 4u}) {
+    SynthOptions o;
+    o.seed = seed;
+    const Window w{-777, 4096, 512, 512};
+    const auto [big, weighted] = copied_pieces(s.synthesise(w, o), w.width, w.height, a.width);
+    largest += big / area / 4;
+    mean += weighted / area / 4;
+  }
+  EXPECT_LT(mean, 0.35) << "a pixel's verbatim piece, in exemplars";
+  EXPECT_LT(largest, 1.0) << "the largest verbatim piece, in exemplars";
+}
+
 TEST(Synth, OutputIsNeitherATilingNorNoise) {
   Synthesizer s(photo_analysis());
   const Window w{0, 0, 192, 192};
