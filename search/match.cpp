@@ -176,6 +176,10 @@ constexpr int kPolishSweepLevels = 64;
 constexpr int kScanLevels = 48;
 constexpr int kScanRounds = 2;
 constexpr long kScanRefineEvaluations = 120;
+// The exact magnitude's scan also sweeps each count of at most this many values jointly with each
+// continuous scalar at this many values (refine.h scan_discrete_pairs; a star's points: 10 x 16 x 4).
+constexpr int kPairMaxLevels = 16;
+constexpr int kPairLevels = 16;
 constexpr long kSettleEvaluations = 80;
 constexpr double kPolishStopRmse = 3e-4;  // a polished finalist this exact ends the other polishes  // the settle's renders (default metric, counts pinned)
 // The align stage's renders (registered pixels, metrics/aligned.h; counts and colours pinned).
@@ -271,13 +275,28 @@ RefineResult polish_pattern(Objective& objective, const std::vector<double>& own
 // deterministic benchmark targets, but one of them is the soft 8-pointed star that without it
 // came back with 3 points (4 runs: 3 of 3 right with it, 0 of 1 without).
 nlohmann::json scan_pattern(Objective& objective, RefineResult& r, RefineOptions options, const Budget& budget,
-                            long spent, const std::atomic<bool>* stop) {
-  const long scan_budget = kScanLevels * kScanRounds * long(objective.space().dimensions()) + kScanRefineEvaluations;
+                            long spent, const std::atomic<bool>* stop, bool pairs) {
+  long pair_renders = 0;
+  const auto& dims = objective.space().dims();
+  if (pairs)
+    for (const auto& count : dims)
+      if (count.levels && count.levels <= kPairMaxLevels)
+        for (const auto& d : dims)
+          if (!d.levels && d.param->type == ParamType::Float) pair_renders += long(count.levels) * kPairLevels;
+  const long scan_budget =
+      kScanLevels * kScanRounds * long(objective.space().dimensions()) + pair_renders + kScanRefineEvaluations;
   if ((stop && *stop) || (budget.max_evaluations > 0 && spent + objective.evaluations() + scan_budget > budget.max_evaluations))
     return nullptr;
-  objective.set_budget({objective.evaluations() + scan_budget, 0.0});
-  const auto scanned = scan_coordinates(objective, r.unit, kScanLevels, kScanRounds);
-  nlohmann::json report = {{"before", r.similarity}, {"scanned", scanned.similarity}, {"evaluations", scanned.evaluations}};
+  const long evaluations_before = objective.evaluations();
+  objective.set_budget({evaluations_before + scan_budget, 0.0});
+  auto scanned = scan_coordinates(objective, r.unit, kScanLevels, kScanRounds);
+  nlohmann::json report = {{"before", r.similarity}, {"scanned", scanned.similarity}};
+  if (pair_renders > 0) {
+    const auto paired = scan_discrete_pairs(objective, scanned.unit, kPairMaxLevels, kPairLevels);
+    report["pairs"] = paired.similarity;
+    if (paired.similarity > scanned.similarity) scanned = paired;
+  }
+  report["evaluations"] = objective.evaluations() - evaluations_before;  // the sweeps'
   if (scanned.similarity > r.similarity) {
     options.max_evaluations = kScanRefineEvaluations;
     const auto further = refine(objective, scanned.unit, options);
@@ -785,7 +804,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       coarse_options.max_evaluations = std::max<long>(1, long(polish_budget * kPolishCoarseShare));
       nlohmann::json coarse_report;
       auto c = polish_pattern(coarse, own, lane_points, coarse_options, coarse_report);
-      const auto coarse_scan = scan_pattern(coarse, c, coarse_options, o.budget, evaluations, stop);
+      const auto coarse_scan = scan_pattern(coarse, c, coarse_options, o.budget, evaluations, stop, false);
       evaluations += coarse.evaluations();
       polish["coarse"] = {{"evaluations", coarse.evaluations()}, {"similarity", c.similarity}, {"scan", coarse_scan}};
       lap("coarse");
@@ -793,7 +812,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       own = c.unit;
     }
     auto r = polish_pattern(objective, own, lane_points, options, polish);
-    if (polish["deterministic"]) polish["scan"] = scan_pattern(objective, r, options, o.budget, evaluations, stop);
+    if (polish["deterministic"]) polish["scan"] = scan_pattern(objective, r, options, o.budget, evaluations, stop, true);
     evaluations += objective.evaluations();
     lap("exact");
     // The magnitude weighs colour through the CIELAB planes' spectra only; the closed-form

@@ -273,4 +273,35 @@ RefineResult scan_coordinates(Objective& objective, std::vector<double> start, i
   return result;
 }
 
+RefineResult scan_discrete_pairs(Objective& objective, std::vector<double> start, int max_discrete_levels, int levels) {
+  const auto& dims = objective.space().dims();
+  const long first_evaluation = objective.evaluations();
+  RefineResult result;
+  result.unit = objective.space().snap(start);
+  result.similarity = objective.evaluate(result.unit);
+  const auto from = result.unit;  // every pair varies the start's point, not a moving one
+  for (size_t i = 0; i < dims.size() && !objective.exhausted(); ++i) {
+    if (!dims[i].levels || dims[i].levels > max_discrete_levels) continue;
+    for (size_t j = 0; j < dims.size() && !objective.exhausted(); ++j) {
+      if (dims[j].levels || dims[j].param->type != ParamType::Float) continue;
+      std::vector<std::vector<double>> candidates;
+      for (int a = 0; a < dims[i].levels; ++a)
+        for (int b = 0; b < levels; ++b) {
+          auto p = from;
+          p[i] = (a + 0.5) / dims[i].levels;
+          p[j] = levels > 1 ? double(b) / (levels - 1) : 0.5;
+          candidates.push_back(p);
+        }
+      const auto values = objective.evaluate(candidates);
+      const auto best = std::max_element(values.begin(), values.end()) - values.begin();
+      if (values[best] > result.similarity) {
+        result.similarity = values[best];
+        result.unit = candidates[best];
+      }
+    }
+  }
+  result.evaluations = objective.evaluations() - first_evaluation;
+  return result;
+}
+
 }  // namespace proctex::search

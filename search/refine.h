@@ -49,4 +49,12 @@ RefineResult refine(Objective& objective, std::vector<double> start, const Refin
 // true spacing, so the objective is flat or falling everywhere between.
 RefineResult scan_coordinates(Objective& objective, std::vector<double> start, int levels, int rounds);
 
+// Every whole value of each discrete parameter with at most `max_discrete_levels` values, each
+// jointly with `levels` values across the range of each continuous scalar (the others held): a
+// count whose evidence depends on another parameter. A soft 8-pointed star with inner radius 0.87
+// is nearly a disc; at the inner radius 0.95 of a 4-pointed look-alike every count renders alike,
+// so neither a sweep of the count nor one of the radius leaves the look-alike. Never returns a
+// worse point than `start`.
+RefineResult scan_discrete_pairs(Objective& objective, std::vector<double> start, int max_discrete_levels, int levels);
+
 }  // namespace proctex::search

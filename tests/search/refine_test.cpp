@@ -125,3 +125,46 @@ TEST(ScanCoordinates, FindsAStripePatternsWavinessWhereTheLocalSearchStops) {
 }
 
 }  // namespace proctex::search
+
+namespace proctex::search {
+
+TEST(ScanDiscretePairs, FindsASoftStarsCountWhereNeitherSweepAloneDoes) {
+  // A soft 8-pointed star with inner radius 0.87 is nearly a disc; a 4-pointed look-alike at inner
+  // radius 0.95 renders within RMS 0.004 of it (a deterministic benchmark target that came back
+  // that way). There, every count looks alike, so a sweep of the count alone stays; swept jointly
+  // with the radius, the count comes back.
+  const std::string truth = "star:points=8,inner=0.871,size=0.583,softness=0.412,rotation=45";
+  Fixture f(truth);
+  const metrics::MagnitudeMetric magnitude(kResolution);
+  RenderSettings s;
+  s.width = s.height = kResolution;
+  const auto target = magnitude.features(f.renderer.render(parse_spec_argument(truth), s), kResolution);
+  auto start = resolve(f.decl, parse_spec_argument(truth));
+  start[f.decl.find("points")->offset] = 4.0f;
+  start[f.decl.find("inner")->offset] = 0.95f;
+  std::vector<std::string> pinned;
+  for (const auto& p : f.decl.params)
+    if (p.type == ParamType::Color) pinned.push_back(p.name);
+  const ParameterSpace space(f.decl, start, pinned);
+  const auto value = [&](const std::vector<double>& unit, const std::string& name) {
+    return space.to_packed(unit)[f.decl.find(name)->offset];
+  };
+
+  RefineResult alone{space.to_unit(start), 0.0, 0, 0};
+  {
+    Objective objective(space, target, magnitude, f.renderer, 0, kResolution);
+    RefineOptions options;
+    options.max_evaluations = 0;  // the discrete sweep only
+    options.probe_bounds = false;
+    alone = refine(objective, space.to_unit(start), options);
+  }
+  EXPECT_NE(value(alone.unit, "points"), 8.0f) << "a sweep of the count alone found it";
+
+  Objective objective(space, target, magnitude, f.renderer, 0, kResolution);
+  const RefineResult paired = scan_discrete_pairs(objective, space.to_unit(start), 16, 16);
+  EXPECT_EQ(value(paired.unit, "points"), 8.0f);
+  EXPECT_NEAR(value(paired.unit, "inner"), 0.871f, 0.06f);
+  EXPECT_GT(paired.similarity, alone.similarity);
+}
+
+}  // namespace proctex::search
