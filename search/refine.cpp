@@ -35,6 +35,18 @@ nlopt::algorithm algorithm_for(Optimizer o) {
 // current whole value, so simplex steps and finite differences use at least one bin.
 double bin_width(const Dimension& d) { return d.levels ? 1.0 / d.levels : 0.0; }
 
+// Renders the candidates in one launch and moves `result` to the best of them when it is better
+// than where it stands; returns whether it moved. The step every sweep and probe below repeats.
+bool move_to_best(Objective& objective, const std::vector<std::vector<double>>& candidates, RefineResult& result) {
+  if (candidates.empty()) return false;
+  const auto values = objective.evaluate(candidates);
+  const auto best = std::max_element(values.begin(), values.end()) - values.begin();
+  if (values[best] <= result.similarity) return false;
+  result.similarity = values[best];
+  result.unit = candidates[best];
+  return true;
+}
+
 struct Context {
   Objective* objective;
   long evaluation_cap;  // Objective::evaluations() value at which this refinement stops
@@ -120,12 +132,7 @@ void polish_discrete(Objective& objective, RefineResult& result) {
         candidates.push_back(p);
       }
     }
-    if (candidates.empty()) return;
-    const auto values = objective.evaluate(candidates);
-    const auto best = std::max_element(values.begin(), values.end()) - values.begin();
-    if (values[best] <= result.similarity) return;
-    result.similarity = values[best];
-    result.unit = candidates[best];
+    if (!move_to_best(objective, candidates, result)) return;
   }
 }
 
@@ -142,12 +149,7 @@ void sweep_discrete(Objective& objective, RefineResult& result, int max_levels) 
       p[i] = (k + 0.5) / dims[i].levels;
       candidates.push_back(p);
     }
-    const auto values = objective.evaluate(candidates);
-    const auto best = std::max_element(values.begin(), values.end()) - values.begin();
-    if (values[best] > result.similarity) {
-      result.similarity = values[best];
-      result.unit = candidates[best];
-    }
+    move_to_best(objective, candidates, result);
   }
 }
 
@@ -172,11 +174,7 @@ bool probe_bounds(Objective& objective, RefineResult& result, long max_renders) 
     }
     if (candidates.empty() || static_cast<long>(candidates.size()) > max_renders) break;
     max_renders -= static_cast<long>(candidates.size());
-    const auto values = objective.evaluate(candidates);
-    const auto best = std::max_element(values.begin(), values.end()) - values.begin();
-    if (values[best] <= result.similarity) break;
-    result.similarity = values[best];
-    result.unit = candidates[best];
+    if (!move_to_best(objective, candidates, result)) break;
     moved = true;
   }
   return moved;
@@ -258,13 +256,7 @@ RefineResult scan_coordinates(Objective& objective, std::vector<double> start, i
         p[i] = levels > 1 ? double(k) / (levels - 1) : 0.5;
         candidates.push_back(p);
       }
-      const auto values = objective.evaluate(candidates);
-      const auto best = std::max_element(values.begin(), values.end()) - values.begin();
-      if (values[best] > result.similarity) {
-        result.similarity = values[best];
-        result.unit = candidates[best];
-        moved = true;
-      }
+      moved = move_to_best(objective, candidates, result) || moved;
     }
     ++result.passes;
     if (!moved) break;
@@ -292,12 +284,7 @@ RefineResult scan_discrete_pairs(Objective& objective, std::vector<double> start
           p[j] = levels > 1 ? double(b) / (levels - 1) : 0.5;
           candidates.push_back(p);
         }
-      const auto values = objective.evaluate(candidates);
-      const auto best = std::max_element(values.begin(), values.end()) - values.begin();
-      if (values[best] > result.similarity) {
-        result.similarity = values[best];
-        result.unit = candidates[best];
-      }
+      move_to_best(objective, candidates, result);
     }
   }
   result.evaluations = objective.evaluations() - first_evaluation;
