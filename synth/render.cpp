@@ -304,39 +304,6 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
         std::memcpy(dst, &pal.bytes[static_cast<size_t>(pred[0]) * tb], tb);
         continue;
       }
-      if (!flt && !normal) {
-        // 8/16-bit codes: the weighted sum is an exact integer, and (2 sum + W) / 2W is
-        // lround(sum / W) (the same bytes as the floating-point path, at a fraction of the cost).
-        // (Three scalar accumulators: summing into an array kept it in memory, a store-to-load
-        // chain that cost a third of the blend.)
-        int64_t s0 = 0, s1 = 0, s2 = 0, iweight = 0;
-        const int* wt = sb.weight.data();
-        const unsigned char* bytes = pal.bytes.data();
-        for (size_t k = 0; k < pred.size(); ++k) {
-          if (pred[k] < 0) continue;
-          const int64_t wk = wt[k];
-          iweight += wk;
-          const unsigned char* b = bytes + static_cast<size_t>(pred[k]) * tb;
-          if (wide) {
-            uint16_t v[3];
-            std::memcpy(v, b, 6);
-            s0 += wk * v[0], s1 += wk * v[1], s2 += wk * v[2];
-          } else {
-            s0 += wk * b[0], s1 += wk * b[1], s2 += wk * b[2];
-          }
-        }
-        const int64_t isum[3] = {s0, s1, s2};
-        for (int c = 0; c < 3; ++c) {
-          const int64_t code = (2 * isum[c] + iweight) / (2 * iweight);
-          if (wide) {
-            const uint16_t v = static_cast<uint16_t>(code);
-            std::memcpy(dst + 2 * c, &v, 2);
-          } else {
-            dst[c] = static_cast<unsigned char>(code);
-          }
-        }
-        continue;
-      }
       double sum[3] = {0, 0, 0}, weight = 0;
       for (size_t k = 0; k < pred.size(); ++k) {
         if (pred[k] < 0) continue;
