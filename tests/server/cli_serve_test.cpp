@@ -18,35 +18,58 @@ namespace {
 
 using namespace proctex::testing;
 
+// `proctex serve --port 0 --db DB --data DATA` as a child process, as a user starts it; `port` is
+// read from the URL it prints first (0 if it printed none). `shader_path`: its $PROCTEX_SHADER_PATH.
+struct ServeProcess {
+  pid_t pid = -1;
+  int out = -1;
+  int port = 0;
+  std::string line;
+
+  ServeProcess(const std::string& db, const std::string& data, const std::string& shader_path = "") {
+    int fds[2];
+    if (pipe(fds) != 0) return;
+    pid = fork();
+    if (pid == 0) {
+      dup2(fds[1], 1);
+      close(fds[0]);
+      if (!shader_path.empty()) setenv("PROCTEX_SHADER_PATH", shader_path.c_str(), 1);
+      execl(PROCTEX_BINARY, PROCTEX_BINARY, "serve", "--port", "0", "--db", db.c_str(), "--data", data.c_str(), nullptr);
+      _exit(127);
+    }
+    close(fds[1]);
+    out = fds[0];
+    char ch;
+    while (read(out, &ch, 1) == 1 && ch != '\n') line += ch;
+    const auto at = line.find("http://127.0.0.1:");
+    if (at != std::string::npos) port = std::stoi(line.substr(at + 17));
+  }
+  // SIGTERM, then the exit status (waitpid's).
+  int stop() {
+    int status = 0;
+    if (pid > 0) {
+      kill(pid, SIGTERM);
+      waitpid(pid, &status, 0);
+      pid = -1;
+    }
+    if (out >= 0) close(out);
+    out = -1;
+    return status;
+  }
+  ~ServeProcess() { stop(); }
+};
+
 TEST(CliServe, PrintsItsUrlServesAndStopsOnSigterm) {
   TempDir dir;
-  int out[2];
-  ASSERT_EQ(pipe(out), 0);
-  const std::string db = (dir / "none.sqlite").string(), data = (dir / "data").string();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(out[1], 1);
-    close(out[0]);
-    execl(PROCTEX_BINARY, PROCTEX_BINARY, "serve", "--port", "0", "--db", db.c_str(), "--data", data.c_str(), nullptr);
-    _exit(127);
-  }
-  close(out[1]);
-  std::string line;
-  char ch;
-  while (read(out[0], &ch, 1) == 1 && ch != '\n') line += ch;
-  const auto at = line.find("http://127.0.0.1:");
-  ASSERT_NE(at, std::string::npos) << line;
-  const int port = std::stoi(line.substr(at + 17));
-  EXPECT_GT(port, 0);
+  ServeProcess serve((dir / "none.sqlite").string(), (dir / "data").string());
+  ASSERT_GT(serve.port, 0) << serve.line;
+  const int port = serve.port;
   httplib::Client c("127.0.0.1", port);
   auto r = c.Get("/api/health");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
   EXPECT_FALSE(body_json(r)["catalog_present"].get<bool>());
-  kill(pid, SIGTERM);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  close(out[0]);
+  const int status = serve.stop();
   EXPECT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
   EXPECT_TRUE(fs::exists(dir / "data" / "jobs.sqlite"));
@@ -72,24 +95,9 @@ TEST(CliServe, AMatchAgainstACatalogueOfAnEditedShaderIsRefused) {
                             .c_str()),
             0);
   write_shader("0.7");
-  int out[2];
-  ASSERT_EQ(pipe(out), 0);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(out[1], 1);
-    close(out[0]);
-    setenv("PROCTEX_SHADER_PATH", (dir / "mine").c_str(), 1);
-    execl(PROCTEX_BINARY, PROCTEX_BINARY, "-q", "serve", "--port", "0", "--db", db.c_str(), "--data", data.c_str(),
-          nullptr);
-    _exit(127);
-  }
-  close(out[1]);
-  std::string line;
-  char ch;
-  while (read(out[0], &ch, 1) == 1 && ch != '\n') line += ch;
-  const auto at = line.find("http://127.0.0.1:");
-  ASSERT_NE(at, std::string::npos) << line;
-  httplib::Client c("127.0.0.1", std::stoi(line.substr(at + 17)));
+  ServeProcess serve(db, data, (dir / "mine").string());
+  ASSERT_GT(serve.port, 0) << serve.line;
+  httplib::Client c("127.0.0.1", serve.port);
   const auto r = post_match(c, slurp(brick_photo()), nlohmann::json::object());
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 409) << r->body;
@@ -100,10 +108,6 @@ TEST(CliServe, AMatchAgainstACatalogueOfAnEditedShaderIsRefused) {
   EXPECT_NE(error.find("mine_bands"), std::string::npos) << error;
   EXPECT_NE(error.find("catalog build"), std::string::npos) << error;
   EXPECT_EQ(body_json(c.Get("/api/jobs"))["jobs"].size(), 0u) << "no job was started";
-  kill(pid, SIGTERM);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  close(out[0]);
 }
 
 TEST(CliServe, NonLoopbackWithoutTokenIsAUsageError) {
