@@ -20,11 +20,17 @@ struct Fixture {
   Renderer renderer;
   metrics::Features target;
 
+  std::string spec;
+
   Fixture(const std::string& target_spec)
-      : decl(ShaderLibrary::builtin().get(parse_spec_argument(target_spec).shader)), space(decl) {
+      : decl(ShaderLibrary::builtin().get(parse_spec_argument(target_spec).shader)), space(decl), spec(target_spec) {
+    target = target_for(metrics::default_metric());
+  }
+  // The target's features under another metric (a Fourier magnitude, as the pattern polish uses).
+  metrics::Features target_for(const metrics::Metric& metric) {
     RenderSettings s;
     s.width = s.height = kResolution;
-    target = metrics::default_metric().features(renderer.render(parse_spec_argument(target_spec), s), kResolution);
+    return metric.features(renderer.render(parse_spec_argument(spec), s), kResolution);
   }
 };
 
@@ -91,9 +97,7 @@ TEST(ScanCoordinates, FindsAStripePatternsWavinessWhereTheLocalSearchStops) {
   const std::string truth = "stripes:stripes=52,angle=52,duty=0.26,softness=0.88,wave=0.3,wave_frequency=2.76";
   Fixture f(truth);
   const metrics::MagnitudeMetric magnitude(kResolution, 2.0);  // blurred by 2 bins, as match.cpp's coarse polish
-  RenderSettings s;
-  s.width = s.height = kResolution;
-  const auto target = magnitude.features(f.renderer.render(parse_spec_argument(truth), s), kResolution);
+  const auto target = f.target_for(magnitude);
   auto start = resolve(f.decl, parse_spec_argument(truth));
   start[f.decl.find("wave")->offset] = 0.9f;
   start[f.decl.find("wave_frequency")->offset] = 1.0f;
@@ -116,7 +120,7 @@ TEST(ScanCoordinates, FindsAStripePatternsWavinessWhereTheLocalSearchStops) {
   EXPECT_GT(scanned.similarity, stuck.similarity);
   // From there the local search on the exact magnitude (match.cpp's next stage) reaches the truth.
   const metrics::MagnitudeMetric exact(kResolution);
-  const auto exact_target = exact.features(f.renderer.render(parse_spec_argument(truth), s), kResolution);
+  const auto exact_target = f.target_for(exact);
   Objective exact_objective(space, exact_target, exact, f.renderer, 0, kResolution);
   const RefineResult refined = refine(exact_objective, scanned.unit, {});
   EXPECT_NEAR(value(refined, "wave_frequency"), 2.76f, 0.1f);
@@ -136,9 +140,7 @@ TEST(ScanDiscretePairs, FindsASoftStarsCountWhereNeitherSweepAloneDoes) {
   const std::string truth = "star:points=8,inner=0.871,size=0.583,softness=0.412,rotation=45";
   Fixture f(truth);
   const metrics::MagnitudeMetric magnitude(kResolution);
-  RenderSettings s;
-  s.width = s.height = kResolution;
-  const auto target = magnitude.features(f.renderer.render(parse_spec_argument(truth), s), kResolution);
+  const auto target = f.target_for(magnitude);
   auto start = resolve(f.decl, parse_spec_argument(truth));
   start[f.decl.find("points")->offset] = 4.0f;
   start[f.decl.find("inner")->offset] = 0.95f;
