@@ -271,9 +271,11 @@ RefineResult polish_pattern(Objective& objective, const std::vector<double>& own
 // from what it finds: a wavy stripe pattern's waviness (amplitude, frequency) has sidebands that
 // meet the target's only near the true values, so the local searches stop at another waviness.
 // `r` is replaced when the scan finds better; `spent`: the match's renders so far (--budget).
-// The exact magnitude's polish gets the same scan: it gained more than 0.01 on only 2 of the 18
-// deterministic benchmark targets, but one of them is the soft 8-pointed star that without it
-// came back with 3 points (4 runs: 3 of 3 right with it, 0 of 1 without).
+// The exact magnitude's polish gets the same scan (it gained more than 0.01 on only 2 of the 18
+// deterministic benchmark targets; the soft 8-pointed star came back with 3 points without it)
+// and, with `pairs`, the joint sweep of each small count with each scalar (scan_discrete_pairs):
+// with the line scan alone that star still came back with 3-4 points in 1 of 4 benchmark runs
+// and 2 of 2 CLI runs; with the joint sweep right in all 3 runs since.
 nlohmann::json scan_pattern(Objective& objective, RefineResult& r, RefineOptions options, const Budget& budget,
                             long spent, const std::atomic<bool>* stop, bool pairs) {
   long pair_renders = 0;
