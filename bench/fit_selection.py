@@ -84,7 +84,7 @@ def series_group(photo, labels):
 
 
 class Data:
-    def __init__(self, folder, db):
+    def __init__(self, folder, db, shape=False):
         con = sqlite3.connect(db)
         meta = con.execute("select distinct metric, metric_version, resolution from shaders").fetchall()
         if len(meta) != 1:
@@ -108,9 +108,28 @@ class Data:
         self.scale = Xs.std(axis=0) + 1e-6
         self.Z = (Xs - self.mean) / self.scale
         self.TZ = (T[:, self.use] - self.mean) / self.scale
+        self.shape_features = 0
+        if shape:
+            # --shape: search::shape_statistics of every sample (catalog_shape.f32, shader-name order =
+            # the rows above) and of every view (shape.f32, the rows of targets.f32), appended to the
+            # structural features and standardised with the catalogue's mean and deviation like them.
+            K = index.get("shape_size", 0)
+            if not K or index.get("shape_shaders") != self.names:
+                sys.exit("the dump has no shape statistics for this catalogue (bench_select_dump of session 11 or later)")
+            XS = np.fromfile(os.path.join(folder, "catalog_shape.f32"), dtype="<f4").reshape(-1, K).astype(np.float64)
+            TS = np.fromfile(os.path.join(folder, "shape.f32"), dtype="<f4").reshape(-1, K).astype(np.float64)
+            if len(XS) != len(X) or len(TS) != len(T):
+                sys.exit("shape statistics rows (%d, %d) do not match the features (%d, %d)" % (len(XS), len(TS), len(X), len(T)))
+            smean, sscale = XS.mean(axis=0), XS.std(axis=0) + 1e-6
+            self.Z = np.hstack([self.Z, (XS - smean) / sscale])
+            self.TZ = np.hstack([self.TZ, (TS - smean) / sscale])
+            self.mean, self.scale = np.concatenate([self.mean, smean]), np.concatenate([self.scale, sscale])
+            self.shape_features = K
         # --augment rows of bench_select_dump: photo-like renders of the samples, labelled by shader.
         aug_path = os.path.join(folder, "augmented.f32")
         if os.path.exists(aug_path) and index.get("augmented"):
+            if shape:
+                sys.exit("--shape with --augment rows is not supported (no shape statistics for them)")
             XA = np.fromfile(aug_path, dtype="<f4").reshape(-1, F).astype(np.float64)
             self.Z = np.vstack([self.Z, (XA[:, self.use] - self.mean) / self.scale])
             self.y = np.concatenate([self.y, np.array(index["augmented"])])
@@ -395,8 +414,13 @@ def load_header(path, data):
     W = W.reshape(-1, K)
     # header z = (x - mean) / scale; the dump's z' = (x - m') / s'  ->  x = z' s' + m'
     # logit = ((z' s' + m' - mean) / scale) W + b = z' (s'/scale) W + ((m' - mean)/scale) W + b
-    W2 = (data.scale / scale)[:, None] * W
-    b2 = b + ((data.mean - mean) / scale) @ W
+    # (a header without shape statistics against a dump with them: zero weights for those)
+    nh = len(mean)
+    if nh > len(data.mean):
+        sys.exit("%s uses %d features, the dump has %d (add --shape)" % (path, nh, len(data.mean)))
+    W2 = np.zeros((len(data.mean), K))
+    W2[:nh] = (data.scale[:nh] / scale)[:, None] * W
+    b2 = b + ((data.mean[:nh] - mean) / scale) @ W
     if len(V) == 0 or not V.any():
         V2 = np.zeros((data.CZ.shape[1], K))
     else:
@@ -471,6 +495,8 @@ def write_header(path, data, model, version, p_good, argv, report):
         "inline constexpr int kResolution = %d;" % data.resolution,
         "// Feature index ranges [begin, end) used, in order.",
         "inline constexpr std::size_t kRanges[][2] = {%s};" % ranges,
+        "// The last kShapeFeatures of the features are search::shape_statistics of the view.",
+        "inline constexpr std::size_t kShapeFeatures = %d;" % data.shape_features,
         "inline constexpr std::size_t kFeatures = %d;" % W.shape[0],
         "inline constexpr std::size_t kShaders = %d;" % W.shape[1],
         "inline constexpr const char* kShaderNames[kShaders] = {",
@@ -514,6 +540,8 @@ def main():
     ap.add_argument("--l2", type=float, default=0.05)
     ap.add_argument("--photo-weight", type=float, default=0.5)
     ap.add_argument("--balance", action="store_true", help="class-balanced photo weights (each kind weighs the same)")
+    ap.add_argument("--shape", action="store_true",
+                    help="add the orientation and elongation statistics (search::shape_statistics) to the structural features")
     ap.add_argument("--colour", action="store_true", help="fit the colour term (see above)")
     ap.add_argument("--colour-l2", type=float, default=0.05, help="L2 penalty of the colour weights")
     ap.add_argument("--grey-weight", type=float, default=0.0,
@@ -541,7 +569,7 @@ def main():
     ap.add_argument("--alpha", type=float, default=None, help="structural weight (default: chosen, see above)")
     ap.add_argument("--write", default="", help="write the model as a C++ header")
     args = ap.parse_args()
-    data = Data(args.folder, args.db)
+    data = Data(args.folder, args.db, shape=args.shape)
     data.balance = args.balance
     data.colour = args.colour
     data.colour_l2 = args.colour_l2

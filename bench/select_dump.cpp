@@ -10,6 +10,10 @@
 // DIR/colour.f32: float32, [photo][search::kColourStatistics]: the photo's colour statistics
 // (search::colour_statistics; for the --synthetic rows, of the sample rendered again at 256 px with
 // its seed: catalogue samples have random colours, and the colour term must be measured on them too).
+// DIR/shape.f32: float32, [photo][scale][search::kShapeStatistics]: each view's orientation and
+// elongation statistics (search::shape_statistics; --synthetic rows: of the sample rendered again);
+// DIR/catalog_shape.f32: float32, [sample of the catalogue in shader-name order][kShapeStatistics]:
+// the same of every sample of --db, rendered again (evidence.json "shape_shaders": that order).
 // --augment N: N photo-like renders of every catalogue sample (another zoom, a lighting gradient,
 // blur, sensor noise; seeded by --augment-seed), their features in DIR/augmented.f32
 // [render][feature] and their shader indices in evidence.json "augmented": training rows for
@@ -127,6 +131,37 @@ int main(int argc, char** argv) {
     std::ofstream targ(fs::path(out) / "targets.f32", std::ios::binary);
     std::ofstream structural(fs::path(out) / "structural.f32", std::ios::binary);
     std::ofstream colour(fs::path(out) / "colour.f32", std::ios::binary);
+    std::ofstream shape(fs::path(out) / "shape.f32", std::ios::binary);
+    auto write_floats = [](std::ofstream& file, const std::vector<double>& values) {
+      for (double v : values) {
+        const float f = static_cast<float>(v);
+        file.write(reinterpret_cast<const char*>(&f), sizeof f);
+      }
+    };
+    {
+      // Every sample of the catalogue rendered again, for its shape statistics (not stored in it).
+      std::ofstream catalog_shape(fs::path(out) / "catalog_shape.f32", std::ios::binary);
+      const auto& library = ShaderLibrary::builtin();
+      Renderer renderer(library);
+      std::vector<const catalog::ShaderCatalogue*> by_name;
+      for (const auto& cat : cats) by_name.push_back(&cat);
+      std::sort(by_name.begin(), by_name.end(), [](auto* a, auto* b) { return a->shader < b->shader; });
+      size_t done = 0;
+      for (const auto* cat : by_name) {
+        const ShaderDecl& decl = library.get(cat->shader);
+        std::vector<std::vector<float>> packed;
+        std::vector<uint32_t> seeds;
+        for (const auto& sample : cat->samples) {
+          packed.push_back(sample.packed);
+          seeds.push_back(sample.seed);
+        }
+        for (const auto& image : renderer.render_batch(decl, packed, seeds, RenderSettings{}))
+          write_floats(catalog_shape, search::shape_statistics(image));
+        index["shape_shaders"].push_back(cat->shader);
+        std::fprintf(stderr, "\rcatalogue shape statistics %zu/%zu shaders", ++done, by_name.size());
+      }
+      std::fprintf(stderr, "\n");
+    }
     auto write_colour = [&](const std::vector<double>& stats) {
       for (double v : stats) {
         const float f = static_cast<float>(v);
@@ -165,6 +200,7 @@ int main(int argc, char** argv) {
       write_colour(search::colour_statistics(photo));
       for (const auto& view : views) {
         write_target(metric.features(view.image, 256));
+        write_floats(shape, search::shape_statistics(view.image));
         entry["views"].push_back(view.name);
       }
       index["photos"].push_back(entry);
@@ -202,8 +238,10 @@ int main(int argc, char** argv) {
           const auto& f = cat2.samples[k].features;
           write_structural(f);
           // the sample rendered again (its random colours), for the colour term a target like it gets
-          write_colour(search::colour_statistics(
-              renderer.render_batch(decl, {cat2.samples[k].packed}, {cat2.samples[k].seed}, RenderSettings{}).front()));
+          const Image image =
+              renderer.render_batch(decl, {cat2.samples[k].packed}, {cat2.samples[k].seed}, RenderSettings{}).front();
+          write_colour(search::colour_statistics(image));
+          write_floats(shape, search::shape_statistics(image));
           write_target(f);
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
@@ -246,6 +284,7 @@ int main(int argc, char** argv) {
     }
     index["feature_size"] = metric.feature_size();
     index["colour_size"] = search::kColourStatistics;
+    index["shape_size"] = search::kShapeStatistics;
     std::ofstream(fs::path(out) / "evidence.json") << index.dump(1);
     std::fprintf(stderr, "\n");
   } catch (const Error& e) {

@@ -102,6 +102,13 @@ SelectionTarget::SelectionTarget(const Image& photo, const metrics::Metric& metr
     size_t at = 0;
     for (const auto& range : model::kRanges)
       for (size_t i = range[0]; i < range[1]; ++i, ++at) z[at] = (f.values.at(i) - model::kMean[at]) / model::kScale[at];
+    // The model's last kShapeFeatures features are the view's shape statistics (none before v6).
+    static_assert(model::kShapeFeatures == 0 || model::kShapeFeatures == kShapeStatistics,
+                  "selection model and shape_statistics disagree");
+    if (model::kShapeFeatures > 0) {
+      const auto shape = shape_statistics(view.image, model::kResolution);
+      for (size_t i = 0; i < model::kShapeFeatures; ++i, ++at) z[at] = (shape[i] - model::kMean[at]) / model::kScale[at];
+    }
     for (size_t k = 0; k < model::kShaders; ++k) {
       double logit = model::kBias[k];
       for (size_t i = 0; i < model::kFeatures; ++i) logit += z[i] * model::kWeights[i * model::kShaders + k];

@@ -47,6 +47,21 @@ std::vector<double> colour_statistics(const Image& photo);
 // say nothing about the material, so the colour term is left out for it.
 inline constexpr double kGreyscaleChroma = 0.5;
 
+// Orientation and elongation statistics of a view's lightness, for the selection's structural
+// term (issue 12: a greyscale lawn and a gravel photo have alike spectra and pyramid statistics;
+// what tells them apart is that blades are long, thin and mostly upright, and pebbles are blobs).
+// At each of kShapeLevels pyramid levels of the view resized to `resolution`: the coherence of
+// the local structure tensor (energy-weighted mean, and the share of energy where it exceeds 0.6)
+// at integration scales 1.5 and 4 px, the concentration of the local orientation at four times
+// its angle (two perpendicular directions: grids, bricks), the anisotropy of the whole level's
+// gradient tensor (one dominant direction), and from the Hessian the ridge share, the blob share
+// and the polarity (bright or dark structure). All are ratios: invariant to rotation, contrast
+// and brightness.
+inline constexpr int kShapeLevels = 4;
+inline constexpr std::size_t kShapeStatisticsPerLevel = 9;
+inline constexpr std::size_t kShapeStatistics = kShapeLevels * kShapeStatisticsPerLevel;
+std::vector<double> shape_statistics(const Image& view, int resolution = 256);
+
 // The selection model's version (recorded in match results).
 int selection_version();
 

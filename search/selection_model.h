@@ -16,6 +16,9 @@ inline constexpr int kMetricVersion = 106;
 inline constexpr int kResolution = 256;
 // Feature index ranges [begin, end) used, in order.
 inline constexpr std::size_t kRanges[][2] = {{0, 190}, {226, 417}};
+// The last kShapeFeatures of the kFeatures are search::shape_statistics of the view (added by
+// hand to this v1 header when shape statistics were introduced: v1 uses none).
+inline constexpr std::size_t kShapeFeatures = 0;
 inline constexpr std::size_t kFeatures = 381;
 inline constexpr std::size_t kShaders = 53;
 inline constexpr const char* kShaderNames[kShaders] = {

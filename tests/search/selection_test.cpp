@@ -2,7 +2,11 @@
 // would look up for the sRGB primaries and greys, in the documented order.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <random>
+#include <vector>
 
 #include "search/selection.h"
 
@@ -61,6 +65,86 @@ TEST(Selection, ColourStatisticsSpreadAndQuantilesOfTwoColours) {
       for (int c = 0; c < 3; ++c) wide.pixel(x, y)[c] = img.pixel(x - 32, y)[c];
   const auto w = colour_statistics(wide);
   for (size_t i = 0; i < kColourStatistics; ++i) EXPECT_NEAR(w[i], s[i], 1e-6) << i;
+}
+
+
+// Shape statistics (search::shape_statistics): per level, [0] coherence at 1.5 px, [1] its
+// coherent share, [2] four-times-angle concentration, [3] coherence at 4 px, [4] its coherent
+// share, [5] whole-level anisotropy, [6] ridge share, [7] blob share, [8] polarity.
+constexpr size_t kPer = kShapeStatisticsPerLevel;
+
+Image from_lightness(int side, const std::function<float(float, float)>& f) {
+  Image img(side, side);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const float v = std::clamp(f(static_cast<float>(x), static_cast<float>(y)), 0.0f, 1.0f);
+      for (int c = 0; c < 3; ++c) img.pixel(x, y)[c] = v;
+    }
+  return img;
+}
+
+Image stripes(float angle_degrees, float period = 12.0f) {
+  const float a = angle_degrees * 3.14159265f / 180.0f;
+  return from_lightness(256, [&](float x, float y) {
+    return 0.5f + 0.4f * std::sin(6.2831853f * (x * std::cos(a) + y * std::sin(a)) / period);
+  });
+}
+
+// White noise blurred a little: no preferred direction, no elongation.
+Image isotropic_noise(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> n(0.0f, 1.0f);
+  std::vector<float> v(256 * 256);
+  for (float& x : v) x = n(rng);
+  std::vector<float> b(v.size());
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x) {
+      float s = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) s += v[((y + dy + 256) % 256) * 256 + (x + dx + 256) % 256];
+      b[y * 256 + x] = s / 9.0f;
+    }
+  return from_lightness(256, [&](float x, float y) { return 0.5f + 0.3f * b[static_cast<int>(y) * 256 + static_cast<int>(x)]; });
+}
+
+TEST(Selection, ShapeStatisticsTellStripesFromNoise) {
+  const auto s = shape_statistics(stripes(30.0f));
+  const auto n = shape_statistics(isotropic_noise(3));
+  ASSERT_EQ(s.size(), kShapeStatistics);
+  // at the finest level: stripes are coherent at both integration scales, in one direction
+  EXPECT_GT(s[0], 0.9);
+  EXPECT_GT(s[3], 0.9);
+  EXPECT_GT(s[5], 0.9);
+  EXPECT_GT(s[6], 0.8);  // ridges, not blobs
+  EXPECT_LT(n[0], 0.6);
+  EXPECT_LT(n[3], 0.4);  // noise loses its coherence over a wide window
+  EXPECT_LT(n[5], 0.1);
+  EXPECT_GT(n[7], 0.2);  // blobs and pits
+}
+
+TEST(Selection, ShapeStatisticsDoNotDependOnRotationOrContrast) {
+  const auto a = shape_statistics(stripes(10.0f));
+  const auto b = shape_statistics(stripes(100.0f));
+  const Image low_contrast = from_lightness(256, [](float x, float y) {
+    return 0.5f + 0.1f * std::sin(6.2831853f * (x * std::cos(0.1745f) + y * std::sin(0.1745f)) / 12.0f);
+  });
+  const auto c = shape_statistics(low_contrast);
+  for (size_t i = 0; i < kShapeStatistics; ++i) {
+    if (i % kPer == 8) continue;  // polarity of a sinusoid is 0 +- discretisation noise
+    EXPECT_NEAR(a[i], b[i], 0.05) << "statistic " << i;
+    EXPECT_NEAR(a[i], c[i], 0.05) << "statistic " << i;
+  }
+}
+
+TEST(Selection, ShapeStatisticsSeeTwoPerpendicularDirectionsOfAGrid) {
+  // a grid of thin dark lines both ways: four-times-angle concentration high, one-direction low
+  const Image grid = from_lightness(256, [](float x, float y) {
+    return (static_cast<int>(x) % 16 < 2 || static_cast<int>(y) % 16 < 2) ? 0.1f : 0.8f;
+  });
+  const auto g = shape_statistics(grid);
+  EXPECT_GT(g[2], 0.7);
+  EXPECT_LT(g[5], 0.1);
+  EXPECT_GT(g[8], 0.2);  // dark lines on a bright ground: valleys (positive curvature across them)
 }
 
 }  // namespace
