@@ -37,6 +37,11 @@ nexuiz's bark and bark2 one group, etr's rock01/06/07 one group. Groups are deal
 largest first, each to the fold with the fewest photos (deterministic). --ungrouped gives the old
 2 folds (alternate photos by kind), for comparison only.
 
+Shape statistics (--shape): search::shape_statistics of every view and catalogue sample (orientation
+coherence, orientation concentration, Hessian ridge / blob / polarity at four pyramid levels;
+bench_select_dump writes them to shape.f32 and catalog_shape.f32), appended to the structural
+features: what a greyscale lawn has and gravel has not (long thin upright blades).
+
 Greyscale copies (bench_select_dump --grey, --grey-weight W): every photo also as its greyscale copy
 (the structural features are computed from luminance, so the copy differs only by having no colour
 term), trained on with weight W per copy and scored out of fold separately: the structural term
