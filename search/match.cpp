@@ -361,6 +361,21 @@ RefineResult align_pattern(const ParameterSpace& space, const std::vector<std::v
   return r;
 }
 
+double pixel_exact_limit(const Image& target) {
+  const size_t n = static_cast<size_t>(target.width) * target.height;
+  if (n == 0) return kPixelExactRmse;
+  double mean[3] = {0, 0, 0}, squares = 0;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) mean[c] += target.pixels[3 * i + c];
+  for (double& m : mean) m /= static_cast<double>(n);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double d = target.pixels[3 * i + c] - mean[c];
+      squares += d * d;
+    }
+  return std::min(kPixelExactRmse, kPixelExactShare * std::sqrt(squares / (3.0 * static_cast<double>(n))));
+}
+
 std::string verdict_for(double s, double probability, bool pattern) {
   if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
   if (s >= kApproximateMatch) return "approximate";
@@ -701,6 +716,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // What the align stage compares with, built on first use: most targets (photos) never reach it.
   std::optional<std::vector<AlignStage>> stages_aligned;
   std::optional<ColourTarget> registered_target;
+  const double exact_limit = pixel_exact_limit(target);
   struct Candidate {
     const Refined* from;
     std::vector<float> packed;
@@ -981,7 +997,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       if (!registered_target) registered_target = make_colour_target(target, o.resolution);
       nlohmann::json rmses = nlohmann::json::object();
       int exact = -1;
-      double exact_rmse = kPixelExactRmse;
+      double exact_rmse = exact_limit;
       for (size_t k = 0; k < tries.size(); ++k) {
         const double rmse = metrics::AlignedMetric::register_rgb(registered_target->rgb, images[k]).rmse;
         rmses[names[k]] = rmse;
@@ -1022,7 +1038,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // similarity, that finalist is chosen instead, however likely the selection finds the first
   // one's material: the selection can be sure and wrong (a knit render: P(grass) 0.96, grass S 0.135
   // against knit's 0.599).
-  const auto pixel_exact = [](const Candidate& c) { return c.image_rmse >= 0 && c.image_rmse <= kPixelExactRmse; };
+  const auto pixel_exact = [&](const Candidate& c) { return c.image_rmse >= 0 && c.image_rmse <= exact_limit; };
   const auto visibly_other = [&](const Candidate& c) {
     return pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
   };

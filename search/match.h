@@ -49,6 +49,12 @@ inline constexpr double kCertainMatch = 0.75;
 // disc at RMS 0.0073 is visibly another shape (its difference is all in the points); the
 // visually identical results of the deterministic benchmark are at 0.0045 and below.
 inline constexpr double kPixelExactRmse = 0.005;
+// ... and at most this share of the target's own RGB deviation (RMS about its mean colour): on a
+// nearly flat target an RMS of 0.005 is most of its detail - faint hairline scratches were "pixel
+// exact" as a flat grid (RMS 0.0048), a dark starfield as another scatter of stars (0.0039).
+inline constexpr double kPixelExactShare = 0.1;
+// min(kPixelExactRmse, kPixelExactShare x the target's RGB deviation).
+double pixel_exact_limit(const Image& target);
 // ... and a seed-independent result on a clean pattern that registers worse than this is visibly
 // another image (an 8-pointed soft star matched as a 3-pointed one: S 0.83, RMS 0.021), so its
 // similarity alone (kCertainMatch) neither makes it "good" nor lets it win outright. Measured in
@@ -109,7 +115,7 @@ struct MatchResult {
   std::map<std::string, double> per_metric;  // components of the default metric
   std::string verdict;
   double image_rmse = -1;                   // deterministic polish: registered RGB RMSE (-1: not measured)
-  bool pixel_exact = false;                 // image_rmse <= kPixelExactRmse: the same pattern, pixel for pixel
+  bool pixel_exact = false;                 // image_rmse <= pixel_exact_limit: the same pattern, pixel for pixel
   bool visibly_other = false;               // seed-independent, clean pattern, image_rmse > kVisiblyOtherRmse
   bool outclassed = false;                  // the selection's choice had < 1/kOutclassedRatio of the best S: replaced by it
   long evaluations = 0;

@@ -281,6 +281,27 @@ TEST(Match, ATargetNoShaderCanExpressIsNoMatch) {
   }
 }
 
+// "Pixel-exact" is relative to what the target shows: on a nearly flat target (faint hairlines on a
+// plain ground) a flat image is within RMS 0.005 of it and misses everything a person sees.
+TEST(Match, PixelExactOnAFaintTargetNeedsACloserReproduction) {
+  Image faint(256, 256), bold(256, 256);
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x) {
+      const bool line = (x + 3 * y) % 29 == 0;  // thin diagonal lines on 1 pixel in 29
+      for (int c = 0; c < 3; ++c) {
+        faint.pixel(x, y)[c] = 0.3f + (line ? 0.025f : 0.0f);
+        bold.pixel(x, y)[c] = line ? 0.9f : 0.1f;
+      }
+    }
+  // the flat ground alone is within the absolute limit of it, yet shows none of the lines
+  double flat_rmse = 0;
+  for (int i = 0; i < 256 * 256 * 3; ++i) flat_rmse += std::pow(faint.pixels[i] - 0.3f, 2);
+  flat_rmse = std::sqrt(flat_rmse / (256 * 256 * 3));
+  EXPECT_LT(flat_rmse, kPixelExactRmse);
+  EXPECT_LT(pixel_exact_limit(faint), flat_rmse / 5) << "a flat image would pass as the faint lines";
+  EXPECT_DOUBLE_EQ(pixel_exact_limit(bold), kPixelExactRmse) << "a contrasted pattern keeps the absolute limit";
+}
+
 // ---------------------------------------------------------------------------------------------
 // The command: options, outputs and errors
 
