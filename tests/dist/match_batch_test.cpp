@@ -89,13 +89,16 @@ TEST_F(MatchBatch, FolderResultsIndexBadPhotoAndResume) {
     const double s = rows[name]["similarity"];
     EXPECT_GT(s, 0.0);
     EXPECT_LE(s, 1.0);
-    EXPECT_EQ(rows[name]["verdict"], s >= 0.5 ? "good" : s >= 0.25 ? "approximate" : "no-match");
+    // A render of a catalogued shader is expressed ("good" needs more than S: the verdict rules are
+    // tested in tests/search/match_test.cpp; the index repeats the result's verdict, below).
+    EXPECT_TRUE(rows[name]["verdict"] == "good" || rows[name]["verdict"] == "approximate") << rows[name].dump();
   }
   // One result JSON per photo, with the full match (spec, similarity, verdict) and what keys it.
   const auto res = nlohmann::json::parse(testing::read_text(dir / "out" / "sub__c-circle.png.json"));
   EXPECT_EQ(res["status"], "ok");
   EXPECT_EQ(res["match"]["spec"]["shader"], "circle");
   EXPECT_DOUBLE_EQ(res["match"]["similarity"].get<double>(), rows["sub/c-circle.png"]["similarity"].get<double>());
+  EXPECT_EQ(res["match"]["verdict"], rows["sub/c-circle.png"]["verdict"]);
   for (const char* key : {"photo_hash", "options_hash", "catalogue_hash"}) EXPECT_TRUE(res.contains(key)) << key;
   // The CSV index: a header and one row per photo.
   const std::string csv = testing::read_text(dir / "out" / "index.csv");
