@@ -35,6 +35,11 @@ if [[ -x "$build/bench/bench_match_eval" && -x "$build/cli/proctex" ]] && comman
   "$build/bench/bench_match_eval" --db "$cat48" --real bench/realset/labels.json --split report \
     --real-images "$build/realset/images" --pictures "$results/match-real" \
     --markdown "$results/match-real.md" --json "$results/match-real.json"
+  # ... and 53 random synthetic targets (shader identified, similarity against the noise ceiling,
+  # "reproduced") plus the project photos (../shared/textures); about 15 minutes.
+  echo "== $build/bench/bench_match_eval --targets 53 (synthetic targets and the project photos)"
+  "$build/bench/bench_match_eval" --db "$cat48" --targets 53 --photos ../shared/textures \
+    --pictures "$results/match-synthetic" --markdown "$results/match-synthetic.md" --json "$results/match-synthetic.json"
 fi
 if [[ -x "$build/bench/bench_serve" && -f "$build/demo/catalog.sqlite" ]]; then
   echo "== $build/bench/bench_serve (proctex serve: slider renders, first preview, service vs CLI; demo catalogue)"
