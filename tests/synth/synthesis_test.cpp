@@ -181,6 +181,38 @@ TEST(SynthAnalysis, CacheRoundTripAndDamagedCacheIsIgnored) {
   EXPECT_NE(analyse_cached(exemplar_of(other), {}, dir.path()).hash, first.hash);
 }
 
+// k = 3 (--candidates 3): a third candidate per texel, dispersed from the texel and from the second
+// one, and cached under its own key, so a k = 2 cache is never read as k = 3 (or the reverse).
+TEST(SynthAnalysis, ThreeCandidatesAreDispersedAndCachedApart) {
+  testing::TempDir dir;
+  const Exemplar ex = exemplar_of(photo(40));
+  AnalysisOptions o3;
+  o3.candidates = 3;
+  const Analysis two = analyse_cached(ex, {}, dir.path());
+  const Analysis three = analyse_cached(ex, o3, dir.path());
+  EXPECT_FALSE(three.from_cache);
+  EXPECT_NE(two.hash, three.hash);
+  EXPECT_EQ(three.candidates, 3);
+  const int n = 40 * 40, sep = 2;  // 5% of 40 px, at least 2
+  auto apart = [&](int a, int b) { return std::max(std::abs(a % 40 - b % 40), std::abs(a / 40 - b / 40)) >= sep; };
+  for (int l = 0; l <= three.levels; ++l) {
+    EXPECT_TRUE(two.level[l].coherent2.empty());
+    ASSERT_EQ(static_cast<int>(three.level[l].coherent2.size()), n);
+    for (int i = 0; i < n; ++i) {
+      const int c1 = three.level[l].coherent[i], c2 = three.level[l].coherent2[i];
+      ASSERT_TRUE(apart(i, c2) && apart(c1, c2)) << "level " << l << " texel " << i;
+    }
+  }
+  const Analysis again = analyse_cached(ex, o3, dir.path());
+  EXPECT_TRUE(again.from_cache);
+  EXPECT_EQ(again.candidates, 3);
+  EXPECT_EQ(again.level.back().coherent2, three.level.back().coherent2);
+  EXPECT_TRUE(analyse_cached(ex, {}, dir.path()).level.back().coherent2.empty());
+  AnalysisOptions o4;
+  o4.candidates = 4;
+  EXPECT_THROW(analyse(ex, o4), UsageError);
+}
+
 TEST(Synth, ZeroRandomnessOnAToroidalExemplarIsTheExactTiling) {
   Synthesizer s(periodic_analysis());
   SynthOptions o;
