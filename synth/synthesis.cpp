@@ -85,7 +85,6 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
 // other classes are read only, so the update in place is race-free and order-independent.
 void sy_correct_px(global int2* S, int i, int j, int w, int h,
                    global const char* A, global const short* NE, global const int* C1,
-                   global const int* C2, int kc,
                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
   // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
@@ -131,9 +130,9 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
       const int dx = odx[q], dy = ody[q];
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
       const int2 c = S[(long)nj * w + ni];
-      for (int kk = 0; kk <= kc; ++kk) {
+      for (int kk = 0; kk < 2; ++kk) {
         int ux = c.x, uy = c.y;
-        if (kk > 0) { const int idx = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
+        if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
         ux -= dx * spacing;
         uy -= dy * spacing;
         if (!toroidal) {
@@ -148,7 +147,7 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
         const int8 e2 = e * e;
         const int4 e4 = e2.lo + e2.hi;
         int d = e4.x + e4.y + e4.z + e4.w;
-        if (kk > 0) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
+        if (kk == 1) d += (d >> 8) * kappa;  // favour coherent candidates (patches), LH05's kappa
         if (d < bestd) { bestd = d; best = (int2)(ux, uy); }
       }
     }
@@ -157,12 +156,11 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
 }
 kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
                        global const char* A, global const short* NE, global const int* C1,
-                       global const int* C2, int kc,
                        constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
   if (i >= w || j >= h) return;
-  sy_correct_px(S, i, j, w, h, A, NE, C1, C2, kc, P, spacing, ew, eh, toroidal, kappa);
+  sy_correct_px(S, i, j, w, h, A, NE, C1, P, spacing, ew, eh, toroidal, kappa);
 }
 // Sub-passes of the refinement and the re-match: the two colours of the checkerboard of the ABSOLUTE
 // coordinates (so windows agree; a tileable period is even, so the colouring is periodic too). A
@@ -241,7 +239,7 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 }
 // Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
 // ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
-// of the 3x3 (C1[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
+// of the 3x3 (C1[S[p + e]] - e; with --candidates 3 also C2[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
 // around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
 // (checkerboard, above).
 int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
@@ -485,7 +483,7 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     d.appearance = ocl::upload(lv.appearance);
     d.neighbourhood = ocl::upload(lv.neighbourhood);
     d.coherent = ocl::upload(lv.coherent);
-    // k = 2: the kernels never read the third candidate (kc = 1); the buffer is a stand-in.
+    // k = 2: the re-match never reads the third candidate (kc = 1); the buffer is a stand-in.
     d.coherent2 = lv.coherent2.empty() ? d.coherent : ocl::upload(lv.coherent2);
     d.projection = ocl::upload(lv.projection);
     device_->levels.push_back(std::move(d));
@@ -588,8 +586,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
         launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
                     static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
                     static_cast<cl_int>(parx), static_cast<cl_int>(pary), lv.appearance, lv.neighbourhood,
-                    lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1), lv.projection,
-                    static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
+                    lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
                     static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
                     static_cast<cl_int>(std::lround(o.kappa * 256)));
       }
@@ -610,6 +607,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
           static_cast<cl_int>(a.toroidal ? 1 : 0));
       if (o.refine_passes > 0) phase("seam refinement");
+      // k = 3 (--candidates 3): the third candidate only here, where the 7x7 texels decide. In the
+      // correction it made the bench worse (median coherence 5.05 -> 5.24; docs/synth.md, seventh pass).
       run(dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch, rematch, dev.texels, lv.coherent, lv.coherent2,
           static_cast<cl_int>(a.candidates - 1),
           static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),

@@ -430,6 +430,32 @@ TEST(Synth, FinalRematchKeepsWindowsExactAndPatchesWhole) {
   EXPECT_THROW(s.synthesise({0, 0, 8, 8}, bad), UsageError);
 }
 
+TEST(Synth, ThreeCandidatesKeepWindowsExactAndChangeOnlyTheRematch) {
+  // --candidates 3: the third candidate enters the re-match (3 px read radius, as before), so windows
+  // stay exact on toroidal and bounded exemplars; without the re-match the map is k = 2's.
+  AnalysisOptions o3;
+  o3.candidates = 3;
+  for (const bool torus : {true, false}) {
+    const Analysis a3 = torus ? analyse(exemplar_of(periodic_exemplar(64)), [&] {
+      AnalysisOptions o = o3;
+      o.tiling = Tiling::Toroidal;
+      return o;
+    }())
+                              : analyse(exemplar_of(photo(64)), o3);
+    Synthesizer s3(a3), s2(torus ? periodic_analysis() : photo_analysis());
+    SynthOptions o;
+    o.seed = 9;
+    const Window whole{-(int64_t(1) << 35) + 5, -77, 120, 96};
+    const auto big = s3.synthesise(whole, o);
+    for (const Window part : {Window{whole.x + 1, whole.y, 59, 96}, Window{whole.x + 60, whole.y + 31, 60, 40},
+                              Window{whole.x + 119, whole.y + 95, 1, 1}})
+      ASSERT_EQ(s3.synthesise(part, o), cut(big, whole, part)) << torus;
+    SynthOptions plain = o;
+    plain.rematch_passes = 0;
+    EXPECT_EQ(s3.synthesise(whole, plain), s2.synthesise(whole, plain)) << torus;
+  }
+}
+
 TEST(Synth, LayoutShiftsKeepTheRowsOfALatticeAligned) {
   // With structure-keeping layout shifts every first-level block is moved by a lattice vector of
   // the brick-like exemplar, so the output's rows continue across blocks: (S_y - y) mod 16 (the row
