@@ -42,6 +42,7 @@ struct SynthCliOptions {
   bool tileable = false;
   std::string blend_seams = "on";
   std::string exemplar_tiles = "auto";
+  int candidates = 2;
   std::string coords;
   std::string jitter_map;
   std::vector<std::string> pastes;
@@ -135,8 +136,9 @@ void run_graph(const SynthCliOptions& o, const GlobalOptions& global) {
   if (!o.exemplar.empty())
     throw UsageError(fmt::format("give either an exemplar ('{}') or --graph, not both", o.exemplar),
                      "the graph file lists its exemplars");
-  if (o.tileable || !o.jitter_map.empty() || !o.pastes.empty() || !o.apply.empty() || o.exemplar_tiles != "auto")
-    throw UsageError("--tileable, --jitter-map, --paste, --apply and --exemplar-tiles are not available with --graph",
+  if (o.tileable || !o.jitter_map.empty() || !o.pastes.empty() || !o.apply.empty() || o.exemplar_tiles != "auto" ||
+      o.candidates != 2)
+    throw UsageError("--tileable, --jitter-map, --paste, --apply, --exemplar-tiles and --candidates are not available with --graph",
                      "set \"tiles\" per exemplar in the graph file");
   int width = 0, height = 0;
   parse_size(o.size, width, height);
@@ -256,6 +258,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
     options.period_y = height;
   }
   AnalysisOptions aopt;
+  aopt.candidates = o.candidates;
   if (o.exemplar_tiles == "yes") aopt.tiling = Tiling::Toroidal;
   else if (o.exemplar_tiles == "no") aopt.tiling = Tiling::Bounded;
   else if (o.exemplar_tiles != "auto")
@@ -375,6 +378,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"exemplar", o.exemplar},
                 {"exemplar_size", {analysis.width, analysis.height}},
                 {"exemplar_tiles", analysis.toroidal},
+                {"candidates", analysis.candidates},
                 {"window", {window.x, window.y, window.width, window.height}},
                 {"seed", options.seed},
                 {"randomness", options.randomness},
@@ -472,6 +476,10 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
                   "Preference for growing patches over other similar texels (0 = none; larger keeps bigger pieces; "
                   "default 32, 8 with --graph)")
       ->check(CLI::Range(0.0f, 100.0f));
+  cmd->add_option("--candidates", o->candidates,
+                  "k of the k-coherence candidates: every exemplar texel's own position plus 1 (k = 2) or 2 "
+                  "(k = 3) similar texels elsewhere, found by the analysis (k = 3: a second analysis cache entry)")
+      ->capture_default_str()->check(CLI::Range(2, 3));
   cmd->add_option("--jitter-map", o->jitter_map,
                   "Grey image scaling the randomness per output pixel (white = --randomness, black = none); it "
                   "repeats over the plane from (0, 0)");

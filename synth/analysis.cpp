@@ -214,7 +214,10 @@ struct SplitMix {
 // 3 PatchMatch iterations: each costs ~0.12 s CPU at 256^2 x 9 levels; more barely lowers the
 // neighbourhood distances of the candidates.
 constexpr int kIterations = 3;
-void coherence_level(int w, int h, bool toroidal, AnalysisLevel& lv, uint64_t seed) {
+// With `avoid` (the second candidates), the match must also be `sep` away from avoid[i]: the third
+// candidate of k = 3.
+std::vector<int32_t> coherence_level(int w, int h, bool toroidal, const AnalysisLevel& lv, uint64_t seed,
+                                     const std::vector<int32_t>* avoid = nullptr) {
   const size_t n = static_cast<size_t>(w) * h;
   const int sep = std::max(2, static_cast<int>(std::lround(0.05 * std::max(w, h))));
   const int16_t* f = lv.neighbourhood.data();
@@ -231,6 +234,12 @@ void coherence_level(int w, int h, bool toroidal, AnalysisLevel& lv, uint64_t se
     if (toroidal) dx = std::min(dx, w - dx), dy = std::min(dy, h - dy);
     return std::max(dx, dy) >= sep;
   };
+  auto admissible = [&](int x0, int y0, int x1, int y1) {
+    if (!far_enough(x0, y0, x1, y1)) return false;
+    if (!avoid) return true;
+    const int a = (*avoid)[static_cast<size_t>(y0) * w + x0];
+    return far_enough(a % w, a / w, x1, y1);
+  };
   SplitMix rng{seed};
   std::vector<int32_t> nn(n);
   std::vector<int32_t> best(n);
@@ -239,14 +248,14 @@ void coherence_level(int w, int h, bool toroidal, AnalysisLevel& lv, uint64_t se
     int cx, cy;
     do {
       cx = rng.below(w), cy = rng.below(h);
-    } while (!far_enough(x, y, cx, cy));
+    } while (!admissible(x, y, cx, cy));
     nn[i] = cy * w + cx;
     best[i] = dist(i, nn[i]);
   }
   auto consider = [&](size_t i, int x, int y, int cx, int cy) {
     cx = toroidal ? wrap(cx, w) : std::clamp(cx, 0, w - 1);
     cy = toroidal ? wrap(cy, h) : std::clamp(cy, 0, h - 1);
-    if (!far_enough(x, y, cx, cy)) return;
+    if (!admissible(x, y, cx, cy)) return;
     const size_t c = static_cast<size_t>(cy) * w + cx;
     const int32_t d = dist(i, c);
     if (d < best[i] || (d == best[i] && static_cast<int32_t>(c) < nn[i])) best[i] = d, nn[i] = static_cast<int32_t>(c);
@@ -274,7 +283,7 @@ void coherence_level(int w, int h, bool toroidal, AnalysisLevel& lv, uint64_t se
       }
     }
   }
-  lv.coherent = std::move(nn);
+  return nn;
 }
 
 template <typename Fn>
@@ -299,9 +308,9 @@ void parallel_for(int count, Fn&& fn) {
   if (error) std::rethrow_exception(error);
 }
 
-std::string content_hash(const Exemplar& ex, const Channels& ch, bool toroidal) {
-  std::string key = fmt::format("proctex-synth-analysis v{} {}x{} c{} t{} w{:.6f}|", kAnalysisVersion, ch.width,
-                                ch.height, ch.count, toroidal ? 1 : 0, ex.map_weight);
+std::string content_hash(const Exemplar& ex, const Channels& ch, bool toroidal, int candidates) {
+  std::string key = fmt::format("proctex-synth-analysis v{} {}x{} c{} t{} w{:.6f} k{}|", kAnalysisVersion, ch.width,
+                                ch.height, ch.count, toroidal ? 1 : 0, ex.map_weight, candidates);
   for (int g : ch.normal_groups) key += fmt::format("n{};", g);
   key.append(reinterpret_cast<const char*>(ch.data.data()), ch.data.size() * sizeof(float));
   return fnv1a_hex(key);
@@ -316,12 +325,14 @@ bool load_cache(const std::filesystem::path& file, Analysis& a) {
   std::ifstream f(file, std::ios::binary);
   if (!f) return false;
   uint32_t magic = 0, version = 0;
-  int32_t hdr[4];
+  int32_t hdr[5];
   f.read(reinterpret_cast<char*>(&magic), 4);
   f.read(reinterpret_cast<char*>(&version), 4);
   f.read(reinterpret_cast<char*>(hdr), sizeof hdr);
   if (!f || magic != kMagic || version != kAnalysisVersion) return false;
-  if (hdr[0] != a.width || hdr[1] != a.height || hdr[2] != a.levels || hdr[3] != (a.toroidal ? 1 : 0)) return false;
+  if (hdr[0] != a.width || hdr[1] != a.height || hdr[2] != a.levels || hdr[3] != (a.toroidal ? 1 : 0) ||
+      hdr[4] != a.candidates)
+    return false;
   const uint64_t n = static_cast<uint64_t>(a.width) * a.height;
   a.level.resize(a.levels + 1);
   for (int l = 0; l <= a.levels; ++l) {
@@ -330,7 +341,10 @@ bool load_cache(const std::filesystem::path& file, Analysis& a) {
     if (!read_vec(f, lv.appearance, n * kAppearanceDims) || !read_vec(f, lv.neighbourhood, n * kAppearanceDims) ||
         !read_vec(f, lv.coherent, n) || !read_vec(f, lv.projection, uint64_t(kNeighbourDims) * kAppearanceDims))
       return false;
+    if (!read_vec(f, lv.coherent2, a.candidates >= 3 ? n : 0)) return false;
     for (int32_t c : lv.coherent)
+      if (c < 0 || static_cast<uint64_t>(c) >= n) return false;
+    for (int32_t c : lv.coherent2)
       if (c < 0 || static_cast<uint64_t>(c) >= n) return false;
   }
   char extra;
@@ -345,7 +359,7 @@ void save_cache(const std::filesystem::path& file, const Analysis& a) {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     if (!f) return;  // the cache is an optimisation: an unwritable folder is not an error
     const uint32_t magic = kMagic, version = kAnalysisVersion;
-    const int32_t hdr[4] = {a.width, a.height, a.levels, a.toroidal ? 1 : 0};
+    const int32_t hdr[5] = {a.width, a.height, a.levels, a.toroidal ? 1 : 0, a.candidates};
     f.write(reinterpret_cast<const char*>(&magic), 4);
     f.write(reinterpret_cast<const char*>(&version), 4);
     f.write(reinterpret_cast<const char*>(hdr), sizeof hdr);
@@ -354,6 +368,7 @@ void save_cache(const std::filesystem::path& file, const Analysis& a) {
       write_vec(f, lv.neighbourhood);
       write_vec(f, lv.coherent);
       write_vec(f, lv.projection);
+      write_vec(f, lv.coherent2);
     }
     if (!f) {
       f.close();
@@ -423,6 +438,12 @@ void fill_texels(const Channels& ch, Analysis& a) {
       a.texels[i * ch.count + c] = static_cast<int16_t>(std::lround(std::clamp(ch.data[c * n + i], -64.0f, 64.0f) * 255.0f));
 }
 
+int candidates_of(const AnalysisOptions& o) {
+  if (o.candidates != 2 && o.candidates != 3)
+    throw UsageError(fmt::format("{} k-coherence candidates", o.candidates), "2 (default) or 3");
+  return o.candidates;
+}
+
 bool resolve_toroidal(const Exemplar& ex, const AnalysisOptions& o) {
   if (o.tiling == Tiling::Toroidal) return true;
   if (o.tiling == Tiling::Bounded) return false;
@@ -487,7 +508,8 @@ Analysis analyse(const Exemplar& ex, const AnalysisOptions& options) {
   a.height = ch.height;
   a.levels = level_count(ch.width, ch.height);
   a.toroidal = resolve_toroidal(ex, options);
-  a.hash = content_hash(ex, ch, a.toroidal);
+  a.candidates = candidates_of(options);
+  a.hash = content_hash(ex, ch, a.toroidal, a.candidates);
   fill_texels(ch, a);
   const Sampler s{ch.width, ch.height, a.toroidal};
   const auto stack = gaussian_stack(ch, a.levels, s);
@@ -497,7 +519,10 @@ Analysis analyse(const Exemplar& ex, const AnalysisOptions& options) {
     lv.spacing = 1 << (a.levels - l);
     appearance_level(ch, stack[l], lv.spacing, s, lv);
     neighbourhood_level(ch.width, ch.height, a.toroidal, lv);
-    coherence_level(ch.width, ch.height, a.toroidal, lv, 0x5eed0000u + static_cast<uint64_t>(l));
+    lv.coherent = coherence_level(ch.width, ch.height, a.toroidal, lv, 0x5eed0000u + static_cast<uint64_t>(l));
+    if (a.candidates >= 3)
+      lv.coherent2 = coherence_level(ch.width, ch.height, a.toroidal, lv, 0x5eed1000u + static_cast<uint64_t>(l),
+                                     &lv.coherent);
   });
   a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return a;
@@ -519,7 +544,8 @@ Analysis analyse_cached(const Exemplar& ex, const AnalysisOptions& options, cons
   a.height = ch.height;
   a.levels = level_count(ch.width, ch.height);
   a.toroidal = resolve_toroidal(ex, options);
-  a.hash = content_hash(ex, ch, a.toroidal);
+  a.candidates = candidates_of(options);
+  a.hash = content_hash(ex, ch, a.toroidal, a.candidates);
   const auto file = cache_dir / (a.hash + ".bin");
   if (load_cache(file, a)) {
     fill_texels(ch, a);

@@ -8,8 +8,9 @@
 //     u + h_l (dx, dy), dx, dy in {-1, 0, 1} (9 x 8 = 72 values; the 4 diagonals alone, LH06's
 //     reduced neighbourhood, cut structures more: docs/synth.md), reduced by a second PCA to 8 dimensions with an
 //     integer projection, so synthesis on any device computes bit-identical distances;
-//   - k-coherence candidates (k = 2): every texel itself and its most similar texel at least 5% of
-//     the exemplar size away (spatially dispersed), found by a PatchMatch search.
+//   - k-coherence candidates (k = 2 by default, 3 on request): every texel itself and its most
+//     similar texel at least 5% of the exemplar size away (spatially dispersed), found by a
+//     PatchMatch search; with k = 3 also the most similar texel 5% away from both of those.
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -24,13 +25,14 @@ inline constexpr int kAppearanceDims = 8;
 inline constexpr int kNeighbourTaps = 9;  // the 3x3 taps at spacing h_l
 inline constexpr int kNeighbourDims = kAppearanceDims * kNeighbourTaps;
 inline constexpr int kProjectionShift = 8;  // fixed-point bits of the integer projection
-inline constexpr int kAnalysisVersion = 5;
+inline constexpr int kAnalysisVersion = 6;  // 6: k = 3 candidates (coherent2)
 inline constexpr int kMaxShifts = 64;
 
 enum class Tiling { Auto, Toroidal, Bounded };
 
 struct AnalysisOptions {
   Tiling tiling = Tiling::Auto;
+  int candidates = 2;  // k of the k-coherence candidates: 2 or 3 (issue 13, session 11)
 };
 
 struct AnalysisLevel {
@@ -38,6 +40,7 @@ struct AnalysisLevel {
   std::vector<int8_t> appearance;        // w * h * 8
   std::vector<int16_t> neighbourhood;    // w * h * 8: projected N(u)
   std::vector<int32_t> coherent;         // w * h: index y * w + x of the k = 2 candidate
+  std::vector<int32_t> coherent2;        // w * h with k = 3 (the third candidate), else empty
   std::vector<int32_t> projection;       // 72 * 8: fixed-point PCA basis, row-major [tap*8+dim][out]
 };
 
@@ -45,6 +48,7 @@ struct Analysis {
   int width = 0, height = 0;
   int levels = 0;  // L: levels 0..L are stored (L + 1 entries)
   bool toroidal = false;
+  int candidates = 2;  // k
   std::string hash;  // content hash (exemplar pixels, maps, weights, options, version)
   std::vector<AnalysisLevel> level;
   // The matching channels at the finest level, quantised (round(255 v); colour sRGB-encoded, maps

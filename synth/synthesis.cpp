@@ -239,7 +239,7 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 }
 // Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
 // ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
-// of the 3x3 (C1[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
+// of the 3x3 (C1[S[p + e]] - e; with --candidates 3 also C2[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
 // around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
 // (checkerboard, above).
 int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
@@ -248,7 +248,7 @@ int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |
 // as the channel-by-channel loop).
 #define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM) \
 kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
-                       global const VT* T, global const int* C1, int ew, int eh, int toroidal, int kmode) { \
+                       global const VT* T, global const int* C1, global const int* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
   const int i = get_global_id(0), j = get_global_id(1); \
   if (i >= w || j >= h) return; \
   const int2 s0 = Sin[(long)j * w + i]; \
@@ -264,18 +264,18 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
     inside = ux == s0.x && uy == s0.y; \
   } \
   if (inside) return; \
-  int2 cand[18]; \
+  int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
   for (int e = 0; e < 9; ++e) { \
     const int ex = e % 3 - 1, ey = e / 3 - 1; \
     const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1); \
     const int2 c = Sin[(long)nj * w + ni]; \
-    for (int kk = 0; kk < 2; ++kk) { \
+    for (int kk = 0; kk <= kc; ++kk) { \
       if (kk == 0 && ex == 0 && ey == 0) continue; \
-      if (kk == 1 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
+      if (kk > 0 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
       int ux = c.x, uy = c.y; \
-      if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; } \
+      if (kk > 0) { const int idx = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; } \
       ux -= ni - i; \
       uy -= nj - j; \
       if (toroidal) { \
@@ -373,7 +373,7 @@ struct Synthesizer::Device {
   cl::Buffer texels;
   int texel_channels = 0;
   struct Level {
-    cl::Buffer appearance, neighbourhood, coherent, projection;
+    cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
   };
   std::vector<Level> levels;
 };
@@ -483,6 +483,8 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     d.appearance = ocl::upload(lv.appearance);
     d.neighbourhood = ocl::upload(lv.neighbourhood);
     d.coherent = ocl::upload(lv.coherent);
+    // k = 2: the re-match never reads the third candidate (kc = 1); the buffer is a stand-in.
+    d.coherent2 = lv.coherent2.empty() ? d.coherent : ocl::upload(lv.coherent2);
     d.projection = ocl::upload(lv.projection);
     device_->levels.push_back(std::move(d));
   }
@@ -605,7 +607,10 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
           static_cast<cl_int>(a.toroidal ? 1 : 0));
       if (o.refine_passes > 0) phase("seam refinement");
-      run(dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch, rematch, dev.texels, lv.coherent,
+      // k = 3 (--candidates 3): the third candidate only here, where the 7x7 texels decide. In the
+      // correction it made the bench worse (median coherence 5.05 -> 5.24; docs/synth.md, seventh pass).
+      run(dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch, rematch, dev.texels, lv.coherent, lv.coherent2,
+          static_cast<cl_int>(a.candidates - 1),
           static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
           static_cast<cl_int>(kRematchCoherence));
     }

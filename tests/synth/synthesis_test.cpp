@@ -181,6 +181,38 @@ TEST(SynthAnalysis, CacheRoundTripAndDamagedCacheIsIgnored) {
   EXPECT_NE(analyse_cached(exemplar_of(other), {}, dir.path()).hash, first.hash);
 }
 
+// k = 3 (--candidates 3): a third candidate per texel, dispersed from the texel and from the second
+// one, and cached under its own key, so a k = 2 cache is never read as k = 3 (or the reverse).
+TEST(SynthAnalysis, ThreeCandidatesAreDispersedAndCachedApart) {
+  testing::TempDir dir;
+  const Exemplar ex = exemplar_of(photo(40));
+  AnalysisOptions o3;
+  o3.candidates = 3;
+  const Analysis two = analyse_cached(ex, {}, dir.path());
+  const Analysis three = analyse_cached(ex, o3, dir.path());
+  EXPECT_FALSE(three.from_cache);
+  EXPECT_NE(two.hash, three.hash);
+  EXPECT_EQ(three.candidates, 3);
+  const int n = 40 * 40, sep = 2;  // 5% of 40 px, at least 2
+  auto apart = [&](int a, int b) { return std::max(std::abs(a % 40 - b % 40), std::abs(a / 40 - b / 40)) >= sep; };
+  for (int l = 0; l <= three.levels; ++l) {
+    EXPECT_TRUE(two.level[l].coherent2.empty());
+    ASSERT_EQ(static_cast<int>(three.level[l].coherent2.size()), n);
+    for (int i = 0; i < n; ++i) {
+      const int c1 = three.level[l].coherent[i], c2 = three.level[l].coherent2[i];
+      ASSERT_TRUE(apart(i, c2) && apart(c1, c2)) << "level " << l << " texel " << i;
+    }
+  }
+  const Analysis again = analyse_cached(ex, o3, dir.path());
+  EXPECT_TRUE(again.from_cache);
+  EXPECT_EQ(again.candidates, 3);
+  EXPECT_EQ(again.level.back().coherent2, three.level.back().coherent2);
+  EXPECT_TRUE(analyse_cached(ex, {}, dir.path()).level.back().coherent2.empty());
+  AnalysisOptions o4;
+  o4.candidates = 4;
+  EXPECT_THROW(analyse(ex, o4), UsageError);
+}
+
 TEST(Synth, ZeroRandomnessOnAToroidalExemplarIsTheExactTiling) {
   Synthesizer s(periodic_analysis());
   SynthOptions o;
@@ -396,6 +428,32 @@ TEST(Synth, FinalRematchKeepsWindowsExactAndPatchesWhole) {
   SynthOptions bad;
   bad.rematch_passes = 9;
   EXPECT_THROW(s.synthesise({0, 0, 8, 8}, bad), UsageError);
+}
+
+TEST(Synth, ThreeCandidatesKeepWindowsExactAndChangeOnlyTheRematch) {
+  // --candidates 3: the third candidate enters the re-match (3 px read radius, as before), so windows
+  // stay exact on toroidal and bounded exemplars; without the re-match the map is k = 2's.
+  AnalysisOptions o3;
+  o3.candidates = 3;
+  for (const bool torus : {true, false}) {
+    const Analysis a3 = torus ? analyse(exemplar_of(periodic_exemplar(64)), [&] {
+      AnalysisOptions o = o3;
+      o.tiling = Tiling::Toroidal;
+      return o;
+    }())
+                              : analyse(exemplar_of(photo(64)), o3);
+    Synthesizer s3(a3), s2(torus ? periodic_analysis() : photo_analysis());
+    SynthOptions o;
+    o.seed = 9;
+    const Window whole{-(int64_t(1) << 35) + 5, -77, 120, 96};
+    const auto big = s3.synthesise(whole, o);
+    for (const Window part : {Window{whole.x + 1, whole.y, 59, 96}, Window{whole.x + 60, whole.y + 31, 60, 40},
+                              Window{whole.x + 119, whole.y + 95, 1, 1}})
+      ASSERT_EQ(s3.synthesise(part, o), cut(big, whole, part)) << torus;
+    SynthOptions plain = o;
+    plain.rematch_passes = 0;
+    EXPECT_EQ(s3.synthesise(whole, plain), s2.synthesise(whole, plain)) << torus;
+  }
 }
 
 TEST(Synth, LayoutShiftsKeepTheRowsOfALatticeAligned) {
