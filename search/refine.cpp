@@ -47,6 +47,20 @@ bool move_to_best(Objective& objective, const std::vector<std::vector<double>>& 
   return true;
 }
 
+// A scan's result before it moves: the start, snapped, and its similarity.
+RefineResult scan_start(Objective& objective, const std::vector<double>& start) {
+  RefineResult result;
+  result.unit = objective.space().snap(start);
+  result.similarity = objective.evaluate(result.unit);
+  return result;
+}
+
+// A continuous parameter (what the line scans sweep): a Float without discrete levels.
+bool is_continuous(const Dimension& dim) { return !dim.levels && dim.param->type == ParamType::Float; }
+
+// The k-th of `levels` evenly spaced unit values across the whole range, both ends included.
+double sweep_value(int k, int levels) { return levels > 1 ? double(k) / (levels - 1) : 0.5; }
+
 struct Context {
   Objective* objective;
   long evaluation_cap;  // Objective::evaluations() value at which this refinement stops
@@ -243,17 +257,15 @@ RefineResult refine(Objective& objective, std::vector<double> start, const Refin
 RefineResult scan_coordinates(Objective& objective, std::vector<double> start, int levels, int rounds) {
   const auto& dims = objective.space().dims();
   const long first_evaluation = objective.evaluations();
-  RefineResult result;
-  result.unit = objective.space().snap(start);
-  result.similarity = objective.evaluate(result.unit);
+  RefineResult result = scan_start(objective, start);
   for (int round = 0; round < rounds && !objective.exhausted(); ++round) {
     bool moved = false;
     for (size_t i = 0; i < dims.size() && !objective.exhausted(); ++i) {
-      if (dims[i].levels || dims[i].param->type != ParamType::Float) continue;
+      if (!is_continuous(dims[i])) continue;
       std::vector<std::vector<double>> candidates;
       for (int k = 0; k < levels; ++k) {
         auto p = result.unit;
-        p[i] = levels > 1 ? double(k) / (levels - 1) : 0.5;
+        p[i] = sweep_value(k, levels);
         candidates.push_back(p);
       }
       moved = move_to_best(objective, candidates, result) || moved;
@@ -268,20 +280,18 @@ RefineResult scan_coordinates(Objective& objective, std::vector<double> start, i
 RefineResult scan_discrete_pairs(Objective& objective, std::vector<double> start, int max_discrete_levels, int levels) {
   const auto& dims = objective.space().dims();
   const long first_evaluation = objective.evaluations();
-  RefineResult result;
-  result.unit = objective.space().snap(start);
-  result.similarity = objective.evaluate(result.unit);
+  RefineResult result = scan_start(objective, start);
   const auto from = result.unit;  // every pair varies the start's point, not a moving one
   for (size_t i = 0; i < dims.size() && !objective.exhausted(); ++i) {
     if (!dims[i].levels || dims[i].levels > max_discrete_levels) continue;
     for (size_t j = 0; j < dims.size() && !objective.exhausted(); ++j) {
-      if (dims[j].levels || dims[j].param->type != ParamType::Float) continue;
+      if (!is_continuous(dims[j])) continue;
       std::vector<std::vector<double>> candidates;
       for (int a = 0; a < dims[i].levels; ++a)
         for (int b = 0; b < levels; ++b) {
           auto p = from;
           p[i] = (a + 0.5) / dims[i].levels;
-          p[j] = levels > 1 ? double(b) / (levels - 1) : 0.5;
+          p[j] = sweep_value(b, levels);
           candidates.push_back(p);
         }
       move_to_best(objective, candidates, result);
