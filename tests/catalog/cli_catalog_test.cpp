@@ -18,6 +18,7 @@
 #include "image/image.h"
 #include "tests/support/run.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/user_shader.h"
 
 namespace proctex {
 namespace {
@@ -195,13 +196,7 @@ TEST_F(CatalogCli, NewerSchemaRefusedByEveryCommand) {
 // A shader edited after the build: `catalog build` rebuilds it alone, and until then `match` refuses
 // the catalogue instead of mixing the old version's samples with the new shader (issue 12).
 TEST_F(CatalogCli, EditedShaderIsRebuiltAloneAndMatchRefusesTheStaleCatalogue) {
-  fs::create_directories(dir / "mine");
-  const auto write_shader = [&](const char* gain) {
-    std::ofstream(dir / "mine" / "mine_bands.cl")
-        << "// @shader \"bands for a test\"\n// @param float size = 0.5 [0.1, 1] \"band size\"\n"
-           "float3 shade(float2 p, float fw, uint seed, const Params P) {\n"
-           "  return (float3)(" << gain << "f * pt_fract(p.x * 4.0f / P.size));\n}\n";
-  };
+  const auto write_shader = [&](const char* gain) { testing::write_bands_shader(dir / "mine", gain); };
   write_shader("0.5");
   const std::string env = "PROCTEX_SHADER_PATH='" + (dir / "mine").string() + "' ";
   const std::string bin = env + "'" + PROCTEX_BINARY + "'";

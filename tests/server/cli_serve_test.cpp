@@ -12,6 +12,7 @@
 #include "tests/server/support.h"
 #include "tests/support/run.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/user_shader.h"
 
 namespace proctex {
 namespace {
@@ -80,13 +81,7 @@ TEST(CliServe, AMatchAgainstACatalogueOfAnEditedShaderIsRefused) {
   // samples. The service refuses it as the CLI does (409, a JSON error naming the shader and the
   // rebuild command) instead of starting a job.
   TempDir dir;
-  fs::create_directories(dir / "mine");
-  const auto write_shader = [&](const char* gain) {
-    std::ofstream(dir / "mine" / "mine_bands.cl")
-        << "// @shader \"bands for a test\"\n// @param float size = 0.5 [0.1, 1] \"band size\"\n"
-           "float3 shade(float2 p, float fw, uint seed, const Params P) {\n"
-           "  return (float3)(" << gain << "f * pt_fract(p.x * 4.0f / P.size));\n}\n";
-  };
+  const auto write_shader = [&](const char* gain) { testing::write_bands_shader(dir / "mine", gain); };
   write_shader("0.5");
   const std::string db = (dir / "cat.sqlite").string(), data = (dir / "data").string();
   const std::string env = "PROCTEX_SHADER_PATH='" + (dir / "mine").string() + "' ";
