@@ -11,6 +11,16 @@ uint pt_hash(uint x) {
   return x;
 }
 
+// pt_hash in 16 vector lanes at once (for shaders that test many cells together, e.g. grass).
+uint16 pt_hash16(uint16 x) {
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+
 uint pt_hash2(int x, int y, uint seed) {
   return pt_hash((uint)x * 0x8da6b343U ^ pt_hash((uint)y * 0xd8163841U ^ pt_hash(seed)));
 }

@@ -27,15 +27,6 @@
 #define GRASS_MAX_PER_CELL 10  // blades per lattice unit squared, per layer
 #define GRASS_GRID 1.5f        // grid cells per lattice unit
 
-uint16 grass_hash16(uint16 x) {  // pt_hash, 16 lanes
-  x ^= x >> 16;
-  x *= 0x7feb352dU;
-  x ^= x >> 15;
-  x *= 0x846ca68bU;
-  x ^= x >> 16;
-  return x;
-}
-
 // The 16 lanes' blade geometry, kept for the shading of the blades that cover the pixel.
 typedef struct {
   float ox[16], oy[16], dx[16], dy[16], along[16], v[16], t[16], half_len[16];
@@ -134,7 +125,7 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
     // The 4x4 grid cells around the pixel: at least 1.5 cells (one lattice unit) each way.
     const int x0 = (int)pt_floor(q.x * GRASS_GRID + 0.5f) - 2, y0 = (int)pt_floor(q.y * GRASS_GRID + 0.5f) - 2;
     const int16 cx = x0 + lane, cy = y0 + row;
-    const uint16 hc = grass_hash16((as_uint16(cx) * 0x8da6b343U) ^ (as_uint16(cy) * 0xd8163841U) ^ ls);
+    const uint16 hc = pt_hash16((as_uint16(cx) * 0x8da6b343U) ^ (as_uint16(cy) * 0xd8163841U) ^ ls);
     const float16 qx = q.x - convert_float16(cx) * (1.0f / GRASS_GRID);
     const float16 qy = q.y - convert_float16(cy) * (1.0f / GRASS_GRID);
     GrassLanes L;
