@@ -573,6 +573,10 @@ def main():
     ap.add_argument("--version", type=int, default=1)
     ap.add_argument("--alpha", type=float, default=None, help="structural weight (default: chosen, see above)")
     ap.add_argument("--write", default="", help="write the model as a C++ header")
+    ap.add_argument("--oof-json", default="",
+                    help="write each tune photo's out-of-fold probabilities ({id: {shader: p}}): what the "
+                         "matcher's selection would say of a photo it was not trained on (bench_match_eval "
+                         "--selection-override)")
     args = ap.parse_args()
     data = Data(args.folder, args.db, shape=args.shape)
     data.balance = args.balance
@@ -683,6 +687,16 @@ def main():
         print("%-3s %-9s %-14s %-42s %s" % ("ok" if data.A[i, order[0]] else "BAD", split,
               data.photos[i]["kind"], os.path.basename(data.photos[i]["path"]),
               " ".join("%s %.2f" % (data.names[k], p[k]) for k in order)))
+    if args.oof_json:
+        oof_probabilities = {}
+        for m, test in folds:
+            for i in test:
+                pid = os.path.splitext(os.path.basename(data.photos[i]["path"]))[0]
+                p = data.probabilities(m, i)
+                oof_probabilities[pid] = {data.names[k]: float(p[k]) for k in range(len(data.names))}
+        with open(args.oof_json, "w") as f:
+            json.dump(oof_probabilities, f)
+        print("wrote", args.oof_json, "(%d photos)" % len(oof_probabilities))
     if args.write:
         report_line = "Grouped out-of-fold tune top-1 %.3f (%d photos); tune top-1 %.3f." % (
             np.mean([ok for _, ok in oof]), len(oof), t1)

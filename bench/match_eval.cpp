@@ -135,7 +135,8 @@ std::string percent(int a, int b) { return b ? fmt::format("{}/{} ({:.0f}%)", a,
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string db, photos, pictures, markdown, only, real, split = "tune", real_images = "build/realset/images", json_out;
+  std::string db, photos, pictures, markdown, only, real, split = "tune", real_images = "build/realset/images", json_out,
+      override_file;
   int targets = -1, starts = -1, candidates = -1, screen_resolution = -1, race = -1;
   long evaluations = -1;
   uint64_t seed = 1;
@@ -145,13 +146,16 @@ int main(int argc, char** argv) {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
                 "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
                 "[--screen-resolution R] [--race R] [--real LABELS [--split tune|report|all] [--real-images DIR]] "
-                "[--json FILE]\n"
+                "[--json FILE] [--selection-override FILE]\n"
                 "  --targets N      synthetic targets (default 53, or 0 with --real)\n"
                 "  --real LABELS    labelled real-texture set (bench/realset/labels.json; build the images with\n"
                 "                   python3 bench/realset/build.py): category / top-3 accuracy, wrong-but-good share\n"
                 "  --split S        tune (default), report or all\n"
                 "  --real-images D  folder of <id>.png (default build/realset/images)\n"
-                "  --json FILE      summary and per-image rows as JSON");
+                "  --json FILE      summary and per-image rows as JSON\n"
+                "  --selection-override FILE\n"
+                "                   {photo id: {shader: probability}}: the selection's probabilities of these photos\n"
+                "                   (bench/fit_selection.py --oof-json: out-of-fold, for photos the model was trained on)");
       return 0;
     }
     if (i + 1 >= argc) {
@@ -175,6 +179,7 @@ int main(int argc, char** argv) {
     else if (a == "--split") split = v;
     else if (a == "--real-images") real_images = v;
     else if (a == "--json") json_out = v;
+    else if (a == "--selection-override") override_file = v;
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -201,6 +206,8 @@ int main(int argc, char** argv) {
         if (("," + only + ",").find("," + n + ",") != std::string::npos) keep.push_back(n);
       names = keep;
     }
+    nlohmann::json overrides = nlohmann::json::object();
+    if (!override_file.empty()) overrides = nlohmann::json::parse(std::ifstream(override_file));
     search::MatchOptions options;
     if (evaluations > 0) options.refine.max_evaluations = evaluations;
     if (starts > 0) options.starts = starts;
@@ -424,8 +431,12 @@ int main(int argc, char** argv) {
         if (!fs::exists(file))
           throw Error(file.string() + " is missing", "build the set first: python3 bench/realset/build.py");
         const Image target = search::prepare_target(file, "");
+        search::MatchOptions photo_options = options;
+        if (overrides.contains(row.id)) photo_options.selection_override = overrides.at(row.id).get<std::map<std::string, double>>();
+        else if (!override_file.empty())
+          throw Error(row.id + " has no probabilities in " + override_file, "give every photo of the split");
         const auto t0 = std::chrono::steady_clock::now();
-        const auto r = search::match(target, store, options);
+        const auto r = search::match(target, store, photo_options);
         row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         row.matched = r.spec.shader;
         row.similarity = r.similarity;

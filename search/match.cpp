@@ -465,7 +465,11 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       nearest.push_back(scan.best_full);
     }
     const auto p = selection.probabilities(names, nearest);
-    for (size_t i = 0; i < scans.size(); ++i) scans[i].probability = p[i];
+    for (size_t i = 0; i < scans.size(); ++i) {
+      const auto given = o.selection_override.find(names[i]);
+      scans[i].probability = o.selection_override.empty() ? p[i]
+                             : given != o.selection_override.end() ? given->second : 0.0;
+    }
   }
   std::vector<int> order(scans.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);

@@ -97,6 +97,11 @@ struct MatchOptions {
   std::map<std::string, nlohmann::json> fixed;  // --fix name=value: pinned, not searched
   double selection_weight = kSelectionWeight;   // lambda of the final choice (see kSelectionWeight)
   long polish_evaluations = 400;      // exact polish of a deterministic pattern (0: off; metrics/magnitude.h)
+  // The selection's probability per shader given by the caller instead of the model (a shader
+  // left out gets 0). For evaluation: the out-of-fold probabilities of a labelled photo the model
+  // was trained on (bench_match_eval --selection-override), so that the match sees what it would
+  // see of a new photo. Empty: the model decides (always, in the product).
+  std::map<std::string, double> selection_override;
 };
 
 struct Candidate {
