@@ -386,6 +386,12 @@ double material_probability(const VerdictEvidence& e) {
   return 1.0 / (1.0 + std::exp(-z));
 }
 
+double look_alike_penalty(const std::string& shader) {
+  for (const auto& [name, bias] : verdict_model::kLookAlike)
+    if (shader == name) return verdict_model::kLookAlikeWeight * bias;
+  return 0.0;
+}
+
 std::string verdict_for(double s, double material, bool pattern) {
   if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && material >= kGoodMaterialProbability)) return "good";
   if (s >= kApproximateMatch) return "approximate";
@@ -1063,7 +1069,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     return pixel_exact(c) ? 2e6 - c.image_rmse
            : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
-               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
+               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
+                     (pattern ? 0.0 : look_alike_penalty(c.from->decl->name));
   };
   const Candidate* final_choice = nullptr;
   const Candidate* most_similar = nullptr;

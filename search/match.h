@@ -86,6 +86,11 @@ inline constexpr double kOutclassedRatio = 2.25;
 // similarity as a likelihood and the selection as the prior, with equal say.
 inline constexpr double kSelectionWeight = 1.0;
 
+// What the final choice takes off a flexible shader's log S + log P on a photo: how similar its
+// race lanes got, on average, to tune photos of other materials (search/verdict_model.h). A shader
+// that reaches a high similarity on everything gains less evidence from reaching it here.
+double look_alike_penalty(const std::string& shader);
+
 // "good", "approximate" or "no-match". `material`: the material probability; `pattern`: the
 // target is a clean pattern (see MatchResult).
 std::string verdict_for(double similarity, double material, bool pattern);
