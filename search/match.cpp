@@ -313,16 +313,7 @@ nlohmann::json scan_pattern(Objective& objective, RefineResult& r, RefineOptions
 double pixel_exact_limit(const Image& target) {
   const size_t n = static_cast<size_t>(target.width) * target.height;
   if (n == 0) return kPixelExactRmse;
-  double mean[3] = {0, 0, 0}, squares = 0;
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) mean[c] += target.pixels[3 * i + c];
-  for (double& m : mean) m /= static_cast<double>(n);
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) {
-      const double d = target.pixels[3 * i + c] - mean[c];
-      squares += d * d;
-    }
-  return std::min(kPixelExactRmse, kPixelExactShare * std::sqrt(squares / (3.0 * static_cast<double>(n))));
+  return std::min(kPixelExactRmse, kPixelExactShare * flat_rmse(target));
 }
 
 std::string verdict_for(double s, double probability, bool pattern) {
