@@ -83,16 +83,23 @@ RefineResult align_pattern(const ParameterSpace& space, const std::vector<std::v
   // parameter leads anywhere.
   const long before = evaluations;
   Objective coarse(space, stages.scan_target, stages.stages.front().metric, renderer, seed, stages.scan_resolution);
+  const double from = coarse.evaluate(starts.front());  // the scan's first render (cached)
   const auto scanned = scan_coordinates(coarse, starts.front(), kAlignRescueLevels, kAlignRescueRounds);
   evaluations += coarse.evaluations();
-  // A scan that ends as far from the target on the coarsest stage is not worth the stages' renders
-  // (a finalist of another shader: chevrons for a stripes target).
+  // The stages run again only if the scan found another basin: within the pixel polish's reach on
+  // its own metric and at most half the start's distance there. Otherwise the scan only confirmed
+  // the start (a fine stripe pattern is blurred alike everywhere at this scale: 0.95 -> 0.96, and
+  // the stages from there ended where they had) or found nothing (another shader's finalist).
+  const auto distance = [&](double similarity) {
+    return -stages.stages.front().metric.scale() * std::log(std::max(similarity, 1e-300));
+  };
   RefineResult again;
-  const bool found = !align_missed_at(stages.stages.front().metric, scanned.similarity);
+  const bool found = !align_missed_at(stages.stages.front().metric, scanned.similarity) &&
+                     distance(scanned.similarity) <= kAlignRescueGain * distance(from);
   if (found) again = run_stages(space, {scanned.unit}, stages.stages, renderer, seed, resolution, base, evaluations);
   const bool kept = found && again.similarity > r.similarity;
   if (report)
-    *report = {{"before", r.similarity}, {"scanned", scanned.similarity},
+    *report = {{"before", r.similarity}, {"scan_from", from}, {"scanned", scanned.similarity},
                {"after", found ? nlohmann::json(again.similarity) : nlohmann::json(nullptr)},
                {"evaluations", evaluations - before}, {"kept", kept}};
   return kept ? again : r;

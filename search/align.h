@@ -15,8 +15,8 @@
 // local search leaves it: the registered pixels are flat (similarity ~0.002) everywhere near it.
 // When the stages end farther from the target than the pixel polish can start from
 // (kPixelPolishStartRmse), a line scan of every continuous parameter across its range
-// (refine.h scan_coordinates) on the coarsest stage looks for the basin, and the stages run again
-// from what it finds; the better end point is kept.
+// (refine.h scan_coordinates) on the coarsest stage looks for the basin, and when it finds one
+// (kAlignRescueGain) the stages run again from there; the better end point is kept.
 #include <cstdint>
 #include <vector>
 
@@ -36,6 +36,9 @@ inline constexpr long kAlignEvaluations = 300;
 // a superellipse; 24 levels in one pass already found the basin above, 16 too).
 inline constexpr int kAlignRescueLevels = 24;
 inline constexpr int kAlignRescueRounds = 2;
+// The stages run again from the scan's end only if it is at most this share of the start's
+// distance on the scan's metric (the superellipse: 0.007 from 0.124).
+inline constexpr double kAlignRescueGain = 0.5;
 
 struct AlignStage {
   metrics::AlignedMetric metric;
@@ -68,8 +71,8 @@ bool align_missed(const AlignStages& stages, double similarity);
 
 // The stages from the best of `starts` (the first stage picks it). Returns the end point with its
 // last stage's similarity; `evaluations` counts the renders. With `rescue`, a missed end point gets
-// the rescue (above); `report` (when given) gets {"before", "scanned", "after", "evaluations",
-// "kept"} of it.
+// the rescue (above); `report` (when given) gets {"before", "scan_from", "scanned", "after",
+// "evaluations", "kept"} of it ("after": null when the scan found no other basin).
 RefineResult align_pattern(const ParameterSpace& space, const std::vector<std::vector<double>>& starts,
                            const AlignStages& stages, Renderer& renderer, uint32_t seed, int resolution,
                            const RefineOptions& base, long& evaluations, bool rescue = false,
