@@ -18,7 +18,8 @@ AlignStages align_stages(const Image& target, int resolution) {
     out.stages.push_back({m, m.features(target, resolution), rest.first, rest.second});
   }
   if (!out.stages.empty()) {
-    out.scan_resolution = std::min(resolution, 2 * out.stages.front().metric.size());
+    // At least 64 px: the smallest analysis the metrics support (a 128 px match's first stage is 16).
+    out.scan_resolution = std::min(resolution, std::max(64, 2 * out.stages.front().metric.size()));
     out.scan_target = out.stages.front().metric.features(target, out.scan_resolution);
   }
   return out;

@@ -49,9 +49,10 @@ struct AlignStage {
 
 struct AlignStages {
   std::vector<AlignStage> stages;  // coarse to fine
-  // The rescue's scan: the coarsest stage's metric on renders at `scan_resolution` (twice its side:
-  // it only has to find the basin, which the stages then refine at the full resolution; 64 px
-  // renders cost a tenth of the 256 px ones and found the superellipse's basin as well).
+  // The rescue's scan: the coarsest stage's metric on renders at `scan_resolution` (twice its
+  // side, at least 64: it only has to find the basin, which the stages then refine at the full
+  // resolution; 64 px renders cost a tenth of the 256 px ones and found the superellipse's basin
+  // as well).
   metrics::Features scan_target;
   int scan_resolution = 0;
 };

@@ -86,21 +86,23 @@ TEST(AlignRescue, FindsASuperellipseFromItsComplementAlias) {
 
 TEST(AlignRescue, ANearPointIsNotRescanned) {
   // A point the stages bring home (width and softness a few percent off) costs no more than the
-  // stages: the rescue is only for a missed end point.
+  // stages: the rescue is only for a missed end point. At 128 px, as a catalogue built at 128 px
+  // matches (the rescue's scan renders are then 64 px, not the first stage's 2 x 16).
+  constexpr int kSmall = 128;  // the stages are the same code at any side; a quarter of the renders' cost
   Renderer renderer;
   const ShaderDecl& decl = ShaderLibrary::builtin().get("superellipse");
   const auto truth = packed_of(decl, kTarget);
   RenderSettings rs;
-  rs.width = rs.height = kResolution;
+  rs.width = rs.height = kSmall;
   const Image target = renderer.render_batch(decl, {truth}, {7u}, rs).front();
   auto near = truth;
   near[decl.find("width")->offset] = 0.88f;
   near[decl.find("softness")->offset] = 0.33f;
   const ParameterSpace space(decl, near, colours_of(decl));
-  const auto stages = align_stages(target, kResolution);
+  const auto stages = align_stages(target, kSmall);
   long evaluations = 0;
   nlohmann::json report;
-  const auto r = align_pattern(space, {space.to_unit(near)}, stages, renderer, 7u, kResolution, RefineOptions{},
+  const auto r = align_pattern(space, {space.to_unit(near)}, stages, renderer, 7u, kSmall, RefineOptions{},
                                evaluations, true, &report);
   EXPECT_FALSE(align_missed(stages, r.similarity));
   EXPECT_LT(worst_unit_error(r.unit, space.to_unit(truth)), 0.02);
