@@ -15,6 +15,7 @@
 #include "metrics/composite.h"
 #include "metrics/aligned.h"
 #include "metrics/magnitude.h"
+#include "search/align.h"
 #include "search/colour_fit.h"
 #include "search/pixel_polish.h"
 #include "search/selection.h"
@@ -182,8 +183,7 @@ constexpr int kPairMaxLevels = 16;
 constexpr int kPairLevels = 16;
 constexpr long kSettleEvaluations = 80;
 constexpr double kPolishStopRmse = 3e-4;  // a polished finalist this exact ends the other polishes  // the settle's renders (default metric, counts pinned)
-// The align stage's renders (registered pixels, metrics/aligned.h; counts and colours pinned).
-constexpr long kAlignEvaluations = 300;
+// The align stage (search/align.h; counts and colours pinned): kAlignEvaluations renders.
 constexpr int kAlignMirrorPairDims = 6;  // up to this many dimensions, pairs are mirrored too
 
 // Mean |difference| between renders of one point with two seeds (64 px, linear RGB): 0 for a
@@ -310,70 +310,10 @@ nlohmann::json scan_pattern(Objective& objective, RefineResult& r, RefineOptions
 
 }  // namespace
 
-// The align stage (metrics/aligned.h), coarse to fine: the registered-pixel metric on renders at
-// the final resolution area-averaged by 8, then 4, then 2. A fine pattern's pixels make a
-// narrow basin (a swirl's twist 0.1% of its range off turns 15 arms by half a period at the rim);
-// averaging widens it, so each stage starts inside the next one's basin. The first stage picks the
-// best of `starts`. Returns the end point; `evaluations` counts the renders.
-struct AlignStage {
-  metrics::AlignedMetric metric;
-  metrics::Features target;
-  double share;         // of kAlignEvaluations
-  double initial_step;  // simplex size per unit dimension
-};
-
-// `resolution`: the renders' (the final score's, 256 px): a shader's own antialiasing at a lower
-// resolution is not the area average of the target's pixels, and on a fine pattern that bias moved
-// the optimum (a 15-arm swirl's true point scored 0.43 rendered at 128 px against the 256 px target
-// averaged to 128, a wrong one 0.52). So both are rendered at `resolution` and averaged alike.
-std::vector<AlignStage> align_stages(const Image& target, int resolution) {
-  std::vector<AlignStage> stages;
-  const std::vector<std::pair<int, std::pair<double, double>>> plan = {
-      {8, {0.4, 0.05}}, {4, {0.3, 0.01}}, {2, {0.3, 0.003}}};
-  for (const auto& [factor, rest] : plan) {
-    if (resolution % factor != 0 || resolution / factor < 16) continue;
-    const metrics::AlignedMetric m(resolution / factor);
-    stages.push_back({m, m.features(target, resolution), rest.first, rest.second});
-  }
-  return stages;
-}
-
-RefineResult align_pattern(const ParameterSpace& space, const std::vector<std::vector<double>>& starts,
-                           const std::vector<AlignStage>& stages, Renderer& renderer, uint32_t seed, int resolution,
-                           const RefineOptions& base, long& evaluations) {
-  RefineResult r;
-  r.unit = starts.front();
-  for (size_t k = 0; k < stages.size(); ++k) {
-    const long budget = std::max<long>(2, long(kAlignEvaluations * stages[k].share));
-    Objective objective(space, stages[k].target, stages[k].metric, renderer, seed, resolution);
-    objective.set_budget({budget, 0.0});
-    std::vector<double> from = r.unit;
-    if (k == 0) {
-      const auto scores = objective.evaluate(starts);
-      from = starts[std::max_element(scores.begin(), scores.end()) - scores.begin()];
-    }
-    RefineOptions options = base;
-    options.initial_step = stages[k].initial_step;
-    options.max_evaluations = std::max<long>(1, budget - objective.evaluations());
-    r = refine(objective, from, options);
-    evaluations += objective.evaluations();
-  }
-  return r;
-}
-
 double pixel_exact_limit(const Image& target) {
   const size_t n = static_cast<size_t>(target.width) * target.height;
   if (n == 0) return kPixelExactRmse;
-  double mean[3] = {0, 0, 0}, squares = 0;
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) mean[c] += target.pixels[3 * i + c];
-  for (double& m : mean) m /= static_cast<double>(n);
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) {
-      const double d = target.pixels[3 * i + c] - mean[c];
-      squares += d * d;
-    }
-  return std::min(kPixelExactRmse, kPixelExactShare * std::sqrt(squares / (3.0 * static_cast<double>(n))));
+  return std::min(kPixelExactRmse, kPixelExactShare * flat_rmse(target));
 }
 
 double material_probability(const VerdictEvidence& e) {
@@ -737,7 +677,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const metrics::MagnitudeMetric blurred_magnitude(o.coarse_resolution, kPolishBlurBins);
   const metrics::Features target_blurred = blurred_magnitude.features(target, o.coarse_resolution);
   // What the align stage compares with, built on first use: most targets (photos) never reach it.
-  std::optional<std::vector<AlignStage>> stages_aligned;
+  std::optional<AlignStages> stages_aligned;
   std::optional<ColourTarget> registered_target;
   const double exact_limit = pixel_exact_limit(target);
   struct Candidate {
@@ -935,8 +875,16 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
             if (e != d) mirrored[e] = 1.0 - mirrored[e];
             align_starts.push_back(mirrored);
           }
+        // The rescue (align.h) when the stages miss the target: within --budget only.
+        const bool rescue_fits =
+            (o.budget.max_evaluations <= 0 ||
+             evaluations + align_evaluations + kAlignEvaluations * long(align_bases.size()) +
+                     align_rescue_renders(candidate_space) <= o.budget.max_evaluations) &&
+            (o.budget.max_seconds <= 0 || seconds_since(t_start) < o.budget.max_seconds) && !(stop && *stop);
+        nlohmann::json rescue_report;
         const auto run = align_pattern(candidate_space, align_starts, *stages_aligned, renderer, base.seed,
-                                       o.resolution, o.refine, align_evaluations);
+                                       o.resolution, o.refine, align_evaluations, rescue_fits, &rescue_report);
+        if (!rescue_report.is_null()) polish["align_rescue"].push_back(rescue_report);  // per align base
         align_runs.push_back(run.similarity);
         if (!align_space || run.similarity > r_align.similarity) {
           align_space.emplace(std::move(candidate_space));

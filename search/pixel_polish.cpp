@@ -248,6 +248,21 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
 
 }  // namespace
 
+double flat_rmse(const Image& image) {
+  const size_t n = static_cast<size_t>(image.width) * image.height;
+  if (n == 0) return 0.0;
+  double mean[3] = {0, 0, 0}, squares = 0;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) mean[c] += image.pixels[3 * i + c];
+  for (double& m : mean) m /= static_cast<double>(n);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double d = image.pixels[3 * i + c] - mean[c];
+      squares += d * d;
+    }
+  return std::sqrt(squares / (3.0 * static_cast<double>(n)));
+}
+
 PixelPolishResult pixel_polish(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                const std::vector<std::string>& pinned, const Image& target, Renderer& renderer,
                                long max_evaluations, nlohmann::json& report) {
@@ -313,13 +328,14 @@ PixelPolishResult pixel_polish(const ShaderDecl& decl, const std::vector<float>&
     return shape;
   };
   std::set<std::tuple<std::vector<float>, int, int>> projected_done;
+  const double flat_limit = kPixelPolishFlatShare * flat_rmse(target);
   for (const auto& [i, reg] : candidates) {
     // Exact at the origin already: nothing left to find.
     if (best.rmse >= 0 && best.rmse < 2e-4 && shift(best.dx, best.dy) == 0) break;
     nlohmann::json entry = {{"start", starts[i].name}, {"rmse_before", reg.rmse}, {"shift", {reg.dx, reg.dy}}};
     const auto key = std::make_tuple(shape_of(starts[i].packed), reg.dx, reg.dy);
     const bool at_origin = reg.dx == 0 && reg.dy == 0;
-    if (reg.rmse > (at_origin ? kPixelPolishOriginStartRmse : kPixelPolishStartRmse) ||
+    if (reg.rmse > std::min(at_origin ? kPixelPolishOriginStartRmse : kPixelPolishStartRmse, flat_limit) ||
         best.evaluations >= max_evaluations || projected_done.count(key)) {
       if (projected_done.count(key)) entry["same_shape_as_an_earlier_start"] = true;
       report.push_back(entry);

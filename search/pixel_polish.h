@@ -31,6 +31,15 @@ inline constexpr double kPixelPolishStartRmse = 0.05;
 // can the parameters be the target's, and a duty off by a quarter of its range moves the pattern's
 // phase (wavy stripes: RMS 0.076 at the origin, the truth one scan away).
 inline constexpr double kPixelPolishOriginStartRmse = 0.1;
+// Both limits are also relative to the target's own contrast: a start is polished only if it is
+// closer than this share of a flat image's RMS (flat_rmse). On a faint target (dark blue stripes,
+// flat RMS 0.035) every wrong shader registers at the flat level, under the absolute limits, and
+// their polishes (1500 renders each, ~12 s of a 36 s match) gained nothing; the right start was at
+// 0.66 of it and polished to 0.0007.
+inline constexpr double kPixelPolishFlatShare = 0.8;
+// The RGB RMS difference between `image` and its mean colour: what a flat image of the best colour
+// scores against it (per channel, averaged as metrics/pixels.h and aligned.h register_rgb do).
+double flat_rmse(const Image& image);
 // Renders per polished start (a 9-parameter swirl converges in about 300), and for the whole polish.
 inline constexpr long kPixelPolishEvaluations = 600;
 inline constexpr long kPixelPolishBudget = 1500;
