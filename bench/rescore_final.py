@@ -171,6 +171,19 @@ def calibrate(fit, rep, target_precision=0.95, write="", use=None, C=1.0, beta=0
         if prec >= target_precision:
             threshold = t
     print(f"threshold for {target_precision:.0%} out-of-fold precision: {threshold:.3f}")
+
+    def reliability(p, y, title):
+        edges = [0, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0001]
+        cells = []
+        for lo, hi in zip(edges, edges[1:]):
+            sel = (p >= lo) & (p < hi)
+            if sel.any():
+                cells.append(f"[{lo:.2f},{min(hi, 1):.2f}) {sel.sum()} photos, mean p {p[sel].mean():.2f}, right {y[sel].mean():.2f}")
+        brier = float(np.mean((p - y) ** 2))
+        print(f"  {title}: Brier {brier:.3f}; " + "; ".join(cells))
+    raw = np.array([r["match"]["selection_probability"] for r in fit])
+    reliability(raw, y, "tune, the selection probability as it is")
+    reliability(oof, y, "tune, material probability out-of-fold")
     model.fit(X, y)
     print("coefficients:", np.round(model.coef_[0], 3), "intercept", round(float(model.intercept_[0]), 3))
     called = oof >= threshold
@@ -183,6 +196,8 @@ def calibrate(fit, rep, target_precision=0.95, write="", use=None, C=1.0, beta=0
         Xr = np.array([verdict_features(r["match"]) for r in rep]) * mask
         yr = np.array([r["match"]["spec"]["shader"] in r["accepted"] for r in rep])
         pr = model.predict_proba(Xr)[:, 1]
+        reliability(np.array([r["match"]["selection_probability"] for r in rep]), yr, "report, the selection probability")
+        reliability(pr, yr, "report, material probability")
         for t in (threshold, 0.8, 0.7, 0.6):
             good = pr >= t
             print(f"report: p >= {t:.3f}: {good.sum()} called good, {yr[good].sum()} right"
