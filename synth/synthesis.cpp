@@ -246,24 +246,46 @@ int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |
 // T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
 // multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
 // as the channel-by-channel loop).
-#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM) \
-kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
-                       global const VT* T, global const int* C1, global const int* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
+// The inside test of the re-match, in a kernel of its own: a pixel of this sub-pass's colour is
+// marked when it lies on a join (some neighbour does not continue its exemplar position); every
+// pixel is copied from Sin to S. Straight-line code, so PoCL vectorises it across work-items (in
+// the matching kernel, with its loops, the test ran one pixel at a time: a fifth of its time).
+#define SY_JOIN_MARK(NAME) \
+kernel void NAME(global const int2* Sin, global int2* S, global uchar* M, \
+                 int w, int h, long ox, long oy, int parity, int ew, int eh, int toroidal) { \
   const int i = get_global_id(0), j = get_global_id(1); \
   if (i >= w || j >= h) return; \
-  const int2 s0 = Sin[(long)j * w + i]; \
-  S[(long)j * w + i] = s0; \
-  if (!sy_in_class(ox + i, oy + j, parity)) return; \
-  /*  Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep. */ \
-  int inside = 1; \
-  for (int e = 0; e < 9 && inside; ++e) { \
-    const int ni = clamp(i + e % 3 - 1, 0, w - 1), nj = clamp(j + e / 3 - 1, 0, h - 1); \
-    const int2 c = Sin[(long)nj * w + ni]; \
-    int ux = c.x - (ni - i), uy = c.y - (nj - j); \
-    if (toroidal) { ux = sy_step(ux, ew); uy = sy_step(uy, eh); } \
-    inside = ux == s0.x && uy == s0.y; \
+  const long p = (long)j * w + i; \
+  const int2 s0 = Sin[p]; \
+  S[p] = s0; \
+  /*  The window's outermost ring is never re-matched (its 3x3 would be clamped): it lies in the */ \
+  /*  padding, which the re-match's reach (3 px per sub-pass) never carries into the window. */ \
+  if (!sy_in_class(ox + i, oy + j, parity) || i == 0 || j == 0 || i == w - 1 || j == h - 1) { \
+    M[p] = 0; \
+    return; \
   } \
-  if (inside) return; \
+  /*  The 8 neighbours, unrolled: neighbour d continues p when S[p + d] - d = S[p] (toroidal: modulo). */ \
+  global const int2* q = Sin + p; \
+  const int2 c[8] = {q[-w - 1], q[-w], q[-w + 1], q[-1], q[1], q[w - 1], q[w], q[w + 1]}; \
+  const int2 d[8] = {(int2)(-1, -1), (int2)(0, -1), (int2)(1, -1), (int2)(-1, 0), (int2)(1, 0), (int2)(-1, 1), \
+                     (int2)(0, 1), (int2)(1, 1)}; \
+  int inside = 1; \
+  for (int k = 0; k < 8; ++k) { \
+    int2 u = c[k] - d[k]; \
+    if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); } \
+    inside &= (u.x == s0.x) & (u.y == s0.y); \
+  } \
+  M[p] = (uchar)!inside; \
+}
+SY_JOIN_MARK(sy_join_mark)
+#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
+kernel void NAME(global const int2* Sin, global int2* S, global const uchar* M, int w, int h, \
+                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
+  const int i = get_global_id(0), j = get_global_id(1); \
+  if (i >= w || j >= h) return; \
+  /*  Only the pixels sy_join_mark marked (this colour, on a join); S already holds Sin. */ \
+  if (!M[(long)j * w + i]) return; \
+  const int2 s0 = Sin[(long)j * w + i]; \
   int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
@@ -275,7 +297,7 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
       if (kk == 0 && ex == 0 && ey == 0) continue; \
       if (kk > 0 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
       int ux = c.x, uy = c.y; \
-      if (kk > 0) { const int idx = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; } \
+      if (kk > 0) { const int2 u = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = u.x; uy = u.y; } \
       ux -= ni - i; \
       uy -= nj - j; \
       if (toroidal) { \
@@ -290,15 +312,13 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
     } \
   } \
   if (n == 1) return; \
-  /*  The texels the synthesis has around p. */ \
-  IT ref[48]; \
-  int t = 0; \
+  /*  The texels the synthesis has around p, row by row (7 per row, the centre zero and never used). */ \
+  IT ref[49]; \
   for (int dy = -3; dy <= 3; ++dy) { \
     const int nj = clamp(j + dy, 0, h - 1); \
     for (int dx = -3; dx <= 3; ++dx) { \
-      if (dx == 0 && dy == 0) continue; \
       const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)]; \
-      ref[t++] = CONVERT(T[(long)q.y * ew + q.x]); \
+      ref[(dy + 3) * 7 + dx + 3] = (dx == 0 && dy == 0) ? (IT)(0) : CONVERT(T[(long)q.y * ew + q.x]); \
     } \
   } \
   int2 best = s0; \
@@ -309,28 +329,23 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
     const int plain = toroidal || (cx >= 3 && cy >= 3 && cx < ew - 3 && cy < eh - 3); \
     const int inner_x = cx >= 3 && cx < ew - 3; \
     int d = 0; \
-    t = 0; \
     for (int dy = -3; dy <= 3 && d < bestd; ++dy) { \
       const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh); \
       global const VT* row = T + (long)uy * ew; \
-      IT acc = (IT)(0); \
+      const IT* rr = ref + (dy + 3) * 7; \
       if (inner_x) { \
-        /*  The common case: the row does not wrap, no index arithmetic per tap. */ \
-        global const VT* r = row + cx; \
-        for (int dx = -3; dx <= 3; ++dx) { \
-          if (dx == 0 && dy == 0) continue; \
-          const IT e = ref[t++] - CONVERT(r[dx]); \
-          acc += e * e; \
-        } \
+        /*  The common case: the row does not wrap, one contiguous run of 7 texels. */ \
+        d += ROWDIST(rr, row + cx - 3, dy == 0); \
       } else { \
+        IT acc = (IT)(0); \
         for (int dx = -3; dx <= 3; ++dx) { \
           if (dx == 0 && dy == 0) continue; \
           const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew); \
-          const IT e = ref[t++] - CONVERT(row[ux]); \
+          const IT e = rr[dx + 3] - CONVERT(row[ux]); \
           acc += e * e; \
         } \
+        d += HSUM(acc); \
       } \
-      d += HSUM(acc); \
     } \
     if (d < bestd) { bestd = d; best = cand[k]; } \
   } \
@@ -338,10 +353,36 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
 }
 int sy_hsum8(int8 a) { const int4 a4 = a.lo + a.hi; const int2 a2 = a4.lo + a4.hi; return a2.x + a2.y; }
 int sy_hsum4(int4 a) { const int2 a2 = a.lo + a.hi; return a2.x + a2.y; }
+// The squared distance of a row of 7 texels (the centre one skipped when `centre`): per tap, as the
+// wrapping path does, for 8 channels.
+int sy_row8(const int8* rr, global const short8* t, int centre) {
+  int8 acc = (int8)(0);
+  for (int dx = 0; dx < 7; ++dx) {
+    if (centre && dx == 3) continue;
+    const int8 e = rr[dx] - convert_int8(t[dx]);
+    acc += e * e;
+  }
+  return sy_hsum8(acc);
+}
+// ... for colour alone (short4 texels): the 7 texels are 28 contiguous shorts, loaded as 16 + 8 + 4
+// and compared in wide vectors (the same integer sum; the centre's lanes zeroed).
+int sy_row4(const int4* rr, global const short4* t, int centre) {
+  global const short* ts = (global const short*)t;
+  const int16 a = (int16)(rr[0], rr[1], rr[2], rr[3]);
+  const int8 b = (int8)(rr[4], rr[5]);
+  int16 ea = a - convert_int16(vload16(0, ts));
+  if (centre) ea.hi.hi = (int4)(0);
+  const int8 eb = b - convert_int8(vload8(0, ts + 16));
+  const int4 ec = rr[6] - convert_int4(vload4(0, ts + 24));
+  const int16 sa = ea * ea;
+  const int8 s8 = sa.lo + sa.hi + eb * eb;
+  const int4 s4 = s8.lo + s8.hi + ec * ec;
+  return sy_hsum4(s4);
+}
 // Up to 8 channels as short8; colour alone (3 channels) as short4: half the loads and lanes, the
 // same sums (the padding lanes are zero).
-SY_REMATCH(sy_rematch, short8, int8, convert_int8, sy_hsum8)
-SY_REMATCH(sy_rematch4, short4, int4, convert_int4, sy_hsum4)
+SY_REMATCH(sy_rematch, short8, int8, convert_int8, sy_hsum8, sy_row8)
+SY_REMATCH(sy_rematch4, short4, int4, convert_int4, sy_hsum4, sy_row4)
 )CL";
 
 struct Region {
@@ -369,8 +410,11 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 struct Synthesizer::Device {
   cl::Program program;
-  cl::Kernel upsample, correct, refine, rematch, rematch4;
+  cl::Kernel upsample, correct, refine, join_mark, rematch, rematch4;
   cl::Buffer texels;
+  // The finest level's k-coherence candidates as (x, y) pairs for the re-match (no division per
+  // candidate); coherent2_xy is coherent_xy again with k = 2 (never read then).
+  cl::Buffer coherent_xy, coherent2_xy;
   int texel_channels = 0;
   struct Level {
     cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
@@ -461,6 +505,7 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
     device_->refine = cl::Kernel(device_->program, "sy_refine");
+    device_->join_mark = cl::Kernel(device_->program, "sy_join_mark");
     device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     device_->rematch4 = cl::Kernel(device_->program, "sy_rematch4");
     return 0;
@@ -477,6 +522,14 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
       for (int c = 0; c < std::min(C, lanes); ++c) t8[i * lanes + c] = analysis.texels[i * C + c];
     device_->texels = ocl::upload(t8);
     device_->texel_channels = C;
+    auto pairs = [&](const std::vector<int32_t>& idx) {
+      std::vector<cl_int2> xy(idx.size());
+      for (size_t i = 0; i < idx.size(); ++i) xy[i] = cl_int2{{idx[i] % analysis.width, idx[i] / analysis.width}};
+      return ocl::upload(xy);
+    };
+    const auto& finest = analysis.level[static_cast<size_t>(analysis.levels)];
+    device_->coherent_xy = pairs(finest.coherent);
+    device_->coherent2_xy = finest.coherent2.empty() ? device_->coherent_xy : pairs(finest.coherent2);
   }
   for (const auto& lv : analysis.level) {
     Device::Level d;
@@ -609,10 +662,25 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       if (o.refine_passes > 0) phase("seam refinement");
       // k = 3 (--candidates 3): the third candidate only here, where the 7x7 texels decide. In the
       // correction it made the bench worse (median coherence 5.05 -> 5.24; docs/synth.md, seventh pass).
-      run(dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch, rematch, dev.texels, lv.coherent, lv.coherent2,
-          static_cast<cl_int>(a.candidates - 1),
-          static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-          static_cast<cl_int>(kRematchCoherence));
+      // Each sub-pass: sy_join_mark copies S and marks this colour's join pixels, then the matching
+      // kernel visits the marked ones.
+      if (rematch > 0) {
+        cl::Buffer mark = ocl::with_cl_errors("allocating synthesis level", [&] {
+          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count);
+        });
+        cl::Kernel& match = dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch;
+        for (int sub = 0; sub < 2 * rematch; ++sub) {
+          launch2d(dev.join_mark, r.w, r.h, S, other, mark,
+                   static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1),
+                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
+          launch2d(match, r.w, r.h, S, other, mark, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h), dev.texels,
+                   dev.coherent_xy, dev.coherent2_xy, static_cast<cl_int>(a.candidates - 1),
+                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
+                   static_cast<cl_int>(kRematchCoherence));
+          std::swap(S, other);
+        }
+      }
     }
     if (l == L && rematch > 0) phase("re-match");
     parent = S;
