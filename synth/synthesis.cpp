@@ -84,7 +84,7 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
 // One correction sub-pass: the pixels whose absolute coordinates have parity (parx, pary). The
 // other classes are read only, so the update in place is race-free and order-independent.
 void sy_correct_px(global int2* S, int i, int j, int w, int h,
-                   global const char* A, global const short* NE, global const int* C1,
+                   global const char* A, global const short* NE, global const int2* C1,
                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
   // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
@@ -132,7 +132,7 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
       const int2 c = S[(long)nj * w + ni];
       for (int kk = 0; kk < 2; ++kk) {
         int ux = c.x, uy = c.y;
-        if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
+        if (kk == 1) { const int2 u = C1[(long)c.y * ew + c.x]; ux = u.x; uy = u.y; }
         ux -= dx * spacing;
         uy -= dy * spacing;
         if (!toroidal) {
@@ -155,7 +155,7 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   S[(long)j * w + i] = best;
 }
 kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
-                       global const char* A, global const short* NE, global const int* C1,
+                       global const char* A, global const short* NE, global const int2* C1,
                        constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
@@ -412,9 +412,6 @@ struct Synthesizer::Device {
   cl::Program program;
   cl::Kernel upsample, correct, refine, join_mark, rematch, rematch4;
   cl::Buffer texels;
-  // The finest level's k-coherence candidates as (x, y) pairs for the re-match (no division per
-  // candidate); coherent2_xy is coherent_xy again with k = 2 (never read then).
-  cl::Buffer coherent_xy, coherent2_xy;
   int texel_channels = 0;
   struct Level {
     cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
@@ -522,22 +519,20 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
       for (int c = 0; c < std::min(C, lanes); ++c) t8[i * lanes + c] = analysis.texels[i * C + c];
     device_->texels = ocl::upload(t8);
     device_->texel_channels = C;
-    auto pairs = [&](const std::vector<int32_t>& idx) {
-      std::vector<cl_int2> xy(idx.size());
-      for (size_t i = 0; i < idx.size(); ++i) xy[i] = cl_int2{{idx[i] % analysis.width, idx[i] / analysis.width}};
-      return ocl::upload(xy);
-    };
-    const auto& finest = analysis.level[static_cast<size_t>(analysis.levels)];
-    device_->coherent_xy = pairs(finest.coherent);
-    device_->coherent2_xy = finest.coherent2.empty() ? device_->coherent_xy : pairs(finest.coherent2);
   }
   for (const auto& lv : analysis.level) {
     Device::Level d;
     d.appearance = ocl::upload(lv.appearance);
     d.neighbourhood = ocl::upload(lv.neighbourhood);
-    d.coherent = ocl::upload(lv.coherent);
+    // The k-coherence candidates as (x, y) pairs: no division per candidate in the kernels.
+    auto pairs = [&](const std::vector<int32_t>& idx) {
+      std::vector<cl_int2> xy(idx.size());
+      for (size_t i = 0; i < idx.size(); ++i) xy[i] = cl_int2{{idx[i] % analysis.width, idx[i] / analysis.width}};
+      return ocl::upload(xy);
+    };
+    d.coherent = pairs(lv.coherent);
     // k = 2: the re-match never reads the third candidate (kc = 1); the buffer is a stand-in.
-    d.coherent2 = lv.coherent2.empty() ? d.coherent : ocl::upload(lv.coherent2);
+    d.coherent2 = lv.coherent2.empty() ? d.coherent : pairs(lv.coherent2);
     d.projection = ocl::upload(lv.projection);
     device_->levels.push_back(std::move(d));
   }
@@ -675,7 +670,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
                    static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1),
                    static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
           launch2d(match, r.w, r.h, S, other, mark, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h), dev.texels,
-                   dev.coherent_xy, dev.coherent2_xy, static_cast<cl_int>(a.candidates - 1),
+                   lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1),
                    static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
                    static_cast<cl_int>(kRematchCoherence));
           std::swap(S, other);
