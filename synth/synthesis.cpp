@@ -34,6 +34,7 @@ uint sy_hash_pos(long x, long y, uint level, uint seed, uint lane) {
 int sy_wrap(int x, int n) { int r = x % n; return r < 0 ? r + n : r; }
 int sy_reflect(int x, int n) { const int p = 2 * n - 2; x = sy_wrap(x, p); return x >= n ? p - x : x; }
 long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
+int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
 
 // S_l[q] = S_{l-1}[q / 2] + floor(h_l (d - 1/2)) + J_l(q),  J = floor(h_l r_l H(q) + 1/2).
 kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, int parent_zero,
@@ -90,17 +91,33 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
   // keep it. Only the pixels on a join between patches are matched; at the finer levels, where
   // patches are large, that is a small share of the pixels.
+  // While the spacing is at most the exemplar's smaller side, every position wrapped below lies in
+  // (-n, 2n), where one step is the modulo (no division).
+  const int near = spacing <= min(ew, eh);
   {
     const int2 s0 = S[(long)j * w + i];
     int inside = 1;
-    for (int dy = -1; dy <= 1 && inside; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (dx == 0 && dy == 0) continue;
-        const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
-        const int2 c = S[(long)nj * w + ni];
-        int ex = s0.x + (ni - i) * spacing, ey = s0.y + (nj - j) * spacing;
-        if (toroidal) { ex = sy_wrap(ex, ew); ey = sy_wrap(ey, eh); }
-        if (c.x != ex || c.y != ey) { inside = 0; break; }
+    if (near && i > 0 && j > 0 && i < w - 1 && j < h - 1) {
+      // Away from the window's border: the 8 neighbours unrolled, no clamping (the same test).
+      global const int2* q = S + (long)j * w + i;
+      const int2 c[8] = {q[-w - 1], q[-w], q[-w + 1], q[-1], q[1], q[w - 1], q[w], q[w + 1]};
+      const int2 d[8] = {(int2)(-1, -1), (int2)(0, -1), (int2)(1, -1), (int2)(-1, 0), (int2)(1, 0), (int2)(-1, 1),
+                         (int2)(0, 1), (int2)(1, 1)};
+      for (int k = 0; k < 8; ++k) {
+        int2 u = s0 + d[k] * spacing;
+        if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); }
+        inside &= (c[k].x == u.x) & (c[k].y == u.y);
+      }
+    } else {
+      for (int dy = -1; dy <= 1 && inside; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (dx == 0 && dy == 0) continue;
+          const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
+          const int2 c = S[(long)nj * w + ni];
+          int ex = s0.x + (ni - i) * spacing, ey = s0.y + (nj - j) * spacing;
+          if (toroidal) { ex = sy_wrap(ex, ew); ey = sy_wrap(ey, eh); }
+          if (c.x != ex || c.y != ey) { inside = 0; break; }
+        }
       }
     }
     if (inside) return;
@@ -139,6 +156,9 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
           // A bounded exemplar: no candidate that came across its border, and at the finer levels
           // none whose neighbourhood would leave it (patches never run across the border).
           if (ux < margin || ux >= ew - margin || uy < margin || uy >= eh - margin) continue;
+        } else if (near) {
+          ux = sy_step(ux, ew);
+          uy = sy_step(uy, eh);
         } else {
           ux = sy_wrap(ux, ew);
           uy = sy_wrap(uy, eh);
@@ -242,7 +262,6 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 // of the 3x3 (C1[S[p + e]] - e; with --candidates 3 also C2[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
 // around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
 // (checkerboard, above).
-int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
 // T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
 // multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
 // as the channel-by-channel loop).
