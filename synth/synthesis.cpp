@@ -472,6 +472,8 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
   if (o.refine_passes < 0 || o.refine_passes > 8) throw UsageError("--refine-seams must be in [0, 8]");
   if (o.rematch_passes < 0 || o.rematch_passes > 8) throw UsageError("--rematch must be in [0, 8]");
+  if (o.rematch_candidate_passes < 0 || o.rematch_candidate_passes > 8)
+    throw UsageError("--rematch-candidates must be in [0, 8]");
   if (!(o.layout_min_correlation >= -1 && o.layout_min_correlation <= 1))
     throw UsageError(fmt::format("--layout-min-correlation must be in [-1, 1], got {}", o.layout_min_correlation));
   if (!(o.break_pieces >= 0 && o.break_pieces <= 1))
@@ -691,7 +693,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           launch2d(match, r.w, r.h, S, other, mark, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h), dev.texels,
                    lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1),
                    static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-                   static_cast<cl_int>(kRematchCoherence));
+                   static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
           std::swap(S, other);
         }
       }
