@@ -265,46 +265,33 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 // T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
 // multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
 // as the channel-by-channel loop).
-// The inside test of the re-match, in a kernel of its own: a pixel of this sub-pass's colour is
-// marked when it lies on a join (some neighbour does not continue its exemplar position); every
-// pixel is copied from Sin to S. Straight-line code, so PoCL vectorises it across work-items (in
-// the matching kernel, with its loops, the test ran one pixel at a time: a fifth of its time).
-#define SY_JOIN_MARK(NAME) \
-kernel void NAME(global const int2* Sin, global int2* S, global uchar* M, \
-                 int w, int h, long ox, long oy, int parity, int ew, int eh, int toroidal) { \
-  const int i = get_global_id(0), j = get_global_id(1); \
-  if (i >= w || j >= h) return; \
+#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
+kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
+                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
+  /*  One work-item per pixel of this sub-pass's colour (S already holds a copy of Sin). The window's */ \
+  /*  outermost ring is never re-matched (its 3x3 would be clamped): it lies in the padding, which the */ \
+  /*  re-match's reach (3 px per sub-pass) never carries into the window. */ \
+  const int j = get_global_id(1); \
+  if (j >= h) return; \
+  const int i = (int)((parity - ((ox + oy + j) & 1)) & 1) + 2 * (int)get_global_id(0); \
+  if (i >= w - 1 || i == 0 || j == 0 || j == h - 1) return; \
   const long p = (long)j * w + i; \
   const int2 s0 = Sin[p]; \
-  S[p] = s0; \
-  /*  The window's outermost ring is never re-matched (its 3x3 would be clamped): it lies in the */ \
-  /*  padding, which the re-match's reach (3 px per sub-pass) never carries into the window. */ \
-  if (!sy_in_class(ox + i, oy + j, parity) || i == 0 || j == 0 || i == w - 1 || j == h - 1) { \
-    M[p] = 0; \
-    return; \
+  { \
+    /*  Inside a patch (every neighbour d continues it: S[p + d] - d = S[p], toroidal: modulo) the 7x7 */ \
+    /*  matches exactly: keep. The 8 neighbours unrolled, no clamping. */ \
+    global const int2* q = Sin + p; \
+    const int2 c[8] = {q[-w - 1], q[-w], q[-w + 1], q[-1], q[1], q[w - 1], q[w], q[w + 1]}; \
+    const int2 d[8] = {(int2)(-1, -1), (int2)(0, -1), (int2)(1, -1), (int2)(-1, 0), (int2)(1, 0), (int2)(-1, 1), \
+                       (int2)(0, 1), (int2)(1, 1)}; \
+    int inside = 1; \
+    for (int k = 0; k < 8; ++k) { \
+      int2 u = c[k] - d[k]; \
+      if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); } \
+      inside &= (u.x == s0.x) & (u.y == s0.y); \
+    } \
+    if (inside) return; \
   } \
-  /*  The 8 neighbours, unrolled: neighbour d continues p when S[p + d] - d = S[p] (toroidal: modulo). */ \
-  global const int2* q = Sin + p; \
-  const int2 c[8] = {q[-w - 1], q[-w], q[-w + 1], q[-1], q[1], q[w - 1], q[w], q[w + 1]}; \
-  const int2 d[8] = {(int2)(-1, -1), (int2)(0, -1), (int2)(1, -1), (int2)(-1, 0), (int2)(1, 0), (int2)(-1, 1), \
-                     (int2)(0, 1), (int2)(1, 1)}; \
-  int inside = 1; \
-  for (int k = 0; k < 8; ++k) { \
-    int2 u = c[k] - d[k]; \
-    if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); } \
-    inside &= (u.x == s0.x) & (u.y == s0.y); \
-  } \
-  M[p] = (uchar)!inside; \
-}
-SY_JOIN_MARK(sy_join_mark)
-#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
-kernel void NAME(global const int2* Sin, global int2* S, global const uchar* M, int w, int h, \
-                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
-  const int i = get_global_id(0), j = get_global_id(1); \
-  if (i >= w || j >= h) return; \
-  /*  Only the pixels sy_join_mark marked (this colour, on a join); S already holds Sin. */ \
-  if (!M[(long)j * w + i]) return; \
-  const int2 s0 = Sin[(long)j * w + i]; \
   int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
@@ -429,7 +416,7 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 struct Synthesizer::Device {
   cl::Program program;
-  cl::Kernel upsample, correct, refine, join_mark, rematch, rematch4;
+  cl::Kernel upsample, correct, refine, rematch, rematch4;
   cl::Buffer texels;
   int texel_channels = 0;
   struct Level {
@@ -523,7 +510,6 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
     device_->refine = cl::Kernel(device_->program, "sy_refine");
-    device_->join_mark = cl::Kernel(device_->program, "sy_join_mark");
     device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     device_->rematch4 = cl::Kernel(device_->program, "sy_rematch4");
     return 0;
@@ -678,19 +664,16 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       if (o.refine_passes > 0) phase("seam refinement");
       // k = 3 (--candidates 3): the third candidate only here, where the 7x7 texels decide. In the
       // correction it made the bench worse (median coherence 5.05 -> 5.24; docs/synth.md, seventh pass).
-      // Each sub-pass: sy_join_mark copies S and marks this colour's join pixels, then the matching
-      // kernel visits the marked ones.
+      // Each sub-pass: S is copied to the other buffer, then the matching kernel runs over this
+      // sub-pass's colour of the checkerboard (half the pixels) and writes the ones it changes.
       if (rematch > 0) {
-        cl::Buffer mark = ocl::with_cl_errors("allocating synthesis level", [&] {
-          return cl::Buffer(ocl::Runtime::instance().context(), CL_MEM_READ_WRITE, count);
-        });
         cl::Kernel& match = dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch;
         for (int sub = 0; sub < 2 * rematch; ++sub) {
-          launch2d(dev.join_mark, r.w, r.h, S, other, mark,
-                   static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1),
-                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0));
-          launch2d(match, r.w, r.h, S, other, mark, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h), dev.texels,
+          ocl::with_cl_errors("copying a synthesis level", [&] {
+            return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, other, 0, 0, count * sizeof(cl_int2));
+          });
+          launch2d(match, (r.w + 1) / 2, r.h, S, other, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1), dev.texels,
                    lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1),
                    static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
                    static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
