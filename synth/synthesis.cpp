@@ -277,16 +277,15 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   if (i >= w - 1 || i == 0 || j == 0 || j == h - 1) return; \
   const long p = (long)j * w + i; \
   const int2 s0 = Sin[p]; \
+  /*  The 3x3 around p (no clamping: p is not on the ring), row by row. */ \
+  global const int2* q = Sin + p; \
+  const int2 nb[9] = {q[-w - 1], q[-w], q[-w + 1], q[-1], s0, q[1], q[w - 1], q[w], q[w + 1]}; \
   { \
     /*  Inside a patch (every neighbour d continues it: S[p + d] - d = S[p], toroidal: modulo) the 7x7 */ \
-    /*  matches exactly: keep. The 8 neighbours unrolled, no clamping. */ \
-    global const int2* q = Sin + p; \
-    const int2 c[8] = {q[-w - 1], q[-w], q[-w + 1], q[-1], q[1], q[w - 1], q[w], q[w + 1]}; \
-    const int2 d[8] = {(int2)(-1, -1), (int2)(0, -1), (int2)(1, -1), (int2)(-1, 0), (int2)(1, 0), (int2)(-1, 1), \
-                       (int2)(0, 1), (int2)(1, 1)}; \
+    /*  matches exactly: keep. */ \
     int inside = 1; \
-    for (int k = 0; k < 8; ++k) { \
-      int2 u = c[k] - d[k]; \
+    for (int e = 0; e < 9; ++e) { \
+      int2 u = nb[e] - (int2)(e % 3 - 1, e / 3 - 1); \
       if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); } \
       inside &= (u.x == s0.x) & (u.y == s0.y); \
     } \
@@ -297,15 +296,14 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   cand[n++] = s0; \
   for (int e = 0; e < 9; ++e) { \
     const int ex = e % 3 - 1, ey = e / 3 - 1; \
-    const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1); \
-    const int2 c = Sin[(long)nj * w + ni]; \
+    const int2 c = nb[e]; \
     for (int kk = 0; kk <= kc; ++kk) { \
       if (kk == 0 && ex == 0 && ey == 0) continue; \
       if (kk > 0 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
       int ux = c.x, uy = c.y; \
       if (kk > 0) { const int2 u = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = u.x; uy = u.y; } \
-      ux -= ni - i; \
-      uy -= nj - j; \
+      ux -= ex; \
+      uy -= ey; \
       if (toroidal) { \
         ux = sy_step(ux, ew); \
         uy = sy_step(uy, eh); \
@@ -320,11 +318,18 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   if (n == 1) return; \
   /*  The texels the synthesis has around p, row by row (7 per row, the centre zero and never used). */ \
   IT ref[49]; \
-  for (int dy = -3; dy <= 3; ++dy) { \
-    const int nj = clamp(j + dy, 0, h - 1); \
-    for (int dx = -3; dx <= 3; ++dx) { \
-      const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)]; \
-      ref[(dy + 3) * 7 + dx + 3] = (dx == 0 && dy == 0) ? (IT)(0) : CONVERT(T[(long)q.y * ew + q.x]); \
+  if (i >= 3 && j >= 3 && i < w - 3 && j < h - 3) { \
+    for (int dy = -3; dy <= 3; ++dy) { \
+      global const int2* row = Sin + (long)(j + dy) * w + i - 3; \
+      for (int dx = 0; dx < 7; ++dx) ref[(dy + 3) * 7 + dx] = CONVERT(T[(long)row[dx].y * ew + row[dx].x]); \
+    } \
+  } else { \
+    for (int dy = -3; dy <= 3; ++dy) { \
+      const int nj = clamp(j + dy, 0, h - 1); \
+      for (int dx = -3; dx <= 3; ++dx) { \
+        const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)]; \
+        ref[(dy + 3) * 7 + dx + 3] = CONVERT(T[(long)q.y * ew + q.x]); \
+      } \
     } \
   } \
   int2 best = s0; \
