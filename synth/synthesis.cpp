@@ -419,15 +419,17 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 }  // namespace
 
+struct Synthesizer::DeviceLevel {
+  cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
+  bool has_candidates = false, has_matching = false;
+};
+
 struct Synthesizer::Device {
   cl::Program program;
   cl::Kernel upsample, correct, refine, rematch, rematch4;
   cl::Buffer texels;
   int texel_channels = 0;
-  struct Level {
-    cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
-  };
-  std::vector<Level> levels;
+  std::vector<DeviceLevel> levels;
 };
 
 void check_options(const Analysis& a, const SynthOptions& o) {
@@ -532,26 +534,39 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->texels = ocl::upload(t8);
     device_->texel_channels = C;
   }
-  for (const auto& lv : analysis.level) {
-    Device::Level d;
-    d.appearance = ocl::upload(lv.appearance);
-    d.neighbourhood = ocl::upload(lv.neighbourhood);
+  // Levels are uploaded when a synthesis first needs them (level(l)): with the defaults the first
+  // two levels and level 0 are never corrected, and the finest level needs only its candidates.
+  device_->levels.resize(analysis.level.size());
+  timing::mark("analysis upload to the device");
+}
+
+Synthesizer::~Synthesizer() = default;
+
+// Level l's buffers on the device: the correction's (appearance, neighbourhoods, candidates,
+// projection) or only the candidates (the re-match's), uploaded on first use.
+const Synthesizer::DeviceLevel& Synthesizer::level(int l, bool correction) {
+  auto& d = device_->levels[static_cast<size_t>(l)];
+  const AnalysisLevel& lv = analysis_.level[static_cast<size_t>(l)];
+  if (!d.has_candidates) {
     // The k-coherence candidates as (x, y) pairs: no division per candidate in the kernels.
     auto pairs = [&](const std::vector<int32_t>& idx) {
       std::vector<cl_int2> xy(idx.size());
-      for (size_t i = 0; i < idx.size(); ++i) xy[i] = cl_int2{{idx[i] % analysis.width, idx[i] / analysis.width}};
+      for (size_t i = 0; i < idx.size(); ++i) xy[i] = cl_int2{{idx[i] % analysis_.width, idx[i] / analysis_.width}};
       return ocl::upload(xy);
     };
     d.coherent = pairs(lv.coherent);
     // k = 2: the re-match never reads the third candidate (kc = 1); the buffer is a stand-in.
     d.coherent2 = lv.coherent2.empty() ? d.coherent : pairs(lv.coherent2);
-    d.projection = ocl::upload(lv.projection);
-    device_->levels.push_back(std::move(d));
+    d.has_candidates = true;
   }
-  timing::mark("analysis upload to the device");
+  if (correction && !d.has_matching) {
+    d.appearance = ocl::upload(lv.appearance);
+    d.neighbourhood = ocl::upload(lv.neighbourhood);
+    d.projection = ocl::upload(lv.projection);
+    d.has_matching = true;
+  }
+  return d;
 }
-
-Synthesizer::~Synthesizer() = default;
 
 std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptions& o) {
   const Analysis& a = analysis_;
@@ -638,8 +653,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       timing::mark(fmt::format("level {} {} ({}x{})", l, what, r.w, r.h));
     };
     phase("upsample + jitter");
-    const auto& lv = dev.levels[l];
     const int level_passes = passes_at(a, o, l);
+    const auto& lv = level(l, level_passes > 0 || (l == L && o.refine_passes > 0));
     for (int pass = 0; pass < level_passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;

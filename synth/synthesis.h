@@ -152,6 +152,8 @@ class Synthesizer {
 
  private:
   struct Device;
+  struct DeviceLevel;  // one level's buffers, uploaded on first use
+  const DeviceLevel& level(int l, bool correction);
   const Analysis& analysis_;
   std::unique_ptr<Device> device_;
 };
