@@ -35,6 +35,19 @@ int sy_wrap(int x, int n) { int r = x % n; return r < 0 ? r + n : r; }
 int sy_reflect(int x, int n) { const int p = 2 * n - 2; x = sy_wrap(x, p); return x >= n ? p - x : x; }
 long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
 int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
+// Whether the 8 neighbours q[+-1], q[+-w +- 1] of a pixel at exemplar position s0 all continue its
+// patch, i.e. neighbour d holds s0 + h d (wrapped on a torus; h at most the exemplar's side): the
+// three expected columns and rows are computed once and each neighbour is one 64-bit comparison.
+int sy_inside(global const int2* q, int w, int2 s0, int h, int ew, int eh, int toroidal) {
+  int xm = s0.x - h, xp = s0.x + h, ym = s0.y - h, yp = s0.y + h;
+  if (toroidal) { xm = sy_step(xm, ew); xp = sy_step(xp, ew); ym = sy_step(ym, eh); yp = sy_step(yp, eh); }
+  const long a = as_long((int2)(xm, ym)), b = as_long((int2)(s0.x, ym)), c = as_long((int2)(xp, ym));
+  const long d = as_long((int2)(xm, s0.y)), e = as_long((int2)(xp, s0.y));
+  const long f = as_long((int2)(xm, yp)), g = as_long((int2)(s0.x, yp)), k = as_long((int2)(xp, yp));
+  global const long* r = (global const long*)q;
+  return (r[-w - 1] == a) & (r[-w] == b) & (r[-w + 1] == c) & (r[-1] == d) & (r[1] == e) & (r[w - 1] == f) &
+         (r[w] == g) & (r[w + 1] == k);
+}
 
 // S_l[q] = S_{l-1}[q / 2] + floor(h_l (d - 1/2)) + J_l(q),  J = floor(h_l r_l H(q) + 1/2).
 kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, int parent_zero,
@@ -98,16 +111,8 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
     const int2 s0 = S[(long)j * w + i];
     int inside = 1;
     if (near && i > 0 && j > 0 && i < w - 1 && j < h - 1) {
-      // Away from the window's border: the 8 neighbours unrolled, no clamping (the same test).
-      global const int2* q = S + (long)j * w + i;
-      const int2 c[8] = {q[-w - 1], q[-w], q[-w + 1], q[-1], q[1], q[w - 1], q[w], q[w + 1]};
-      const int2 d[8] = {(int2)(-1, -1), (int2)(0, -1), (int2)(1, -1), (int2)(-1, 0), (int2)(1, 0), (int2)(-1, 1),
-                         (int2)(0, 1), (int2)(1, 1)};
-      for (int k = 0; k < 8; ++k) {
-        int2 u = s0 + d[k] * spacing;
-        if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); }
-        inside &= (c[k].x == u.x) & (c[k].y == u.y);
-      }
+      // Away from the window's border: no clamping (the same test).
+      inside = sy_inside(S + (long)j * w + i, w, s0, spacing, ew, eh, toroidal);
     } else {
       for (int dy = -1; dy <= 1 && inside; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
@@ -279,18 +284,12 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   const int2 s0 = Sin[p]; \
   /*  The 3x3 around p (no clamping: p is not on the ring), row by row. */ \
   global const int2* q = Sin + p; \
-  const int2 nb[9] = {q[-w - 1], q[-w], q[-w + 1], q[-1], s0, q[1], q[w - 1], q[w], q[w + 1]}; \
   { \
     /*  Inside a patch (every neighbour d continues it: S[p + d] - d = S[p], toroidal: modulo) the 7x7 */ \
     /*  matches exactly: keep. */ \
-    int inside = 1; \
-    for (int e = 0; e < 9; ++e) { \
-      int2 u = nb[e] - (int2)(e % 3 - 1, e / 3 - 1); \
-      if (toroidal) { u.x = sy_step(u.x, ew); u.y = sy_step(u.y, eh); } \
-      inside &= (u.x == s0.x) & (u.y == s0.y); \
-    } \
-    if (inside) return; \
+    if (sy_inside(q, w, s0, 1, ew, eh, toroidal)) return; \
   } \
+  const int2 nb[9] = {q[-w - 1], q[-w], q[-w + 1], q[-1], s0, q[1], q[w - 1], q[w], q[w + 1]}; \
   int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
