@@ -270,6 +270,22 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
 // T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
 // multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
 // as the channel-by-channel loop).
+// Appends candidate u (wrapped on a torus; on a bounded exemplar refused when its 7x7 would leave
+// it) unless it is already in the list; returns the new count. The order of the calls is the
+// order of the list, and the first of equally good candidates wins.
+int sy_candidate(int2* cand, int n, int2 u, int ew, int eh, int toroidal) {
+  if (toroidal) {
+    u.x = sy_step(u.x, ew);
+    u.y = sy_step(u.y, eh);
+  } else if (u.x < 3 || u.y < 3 || u.x >= ew - 3 || u.y >= eh - 3) {
+    return n;
+  }
+  const long l = as_long(u);
+  int dup = 0;
+  for (int k = 0; k < n; ++k) dup |= as_long(cand[k]) == l;
+  if (!dup) cand[n++] = u;
+  return n;
+}
 #define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
 kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
                        global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
@@ -293,25 +309,14 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
+  _Pragma("unroll") \
   for (int e = 0; e < 9; ++e) { \
-    const int ex = e % 3 - 1, ey = e / 3 - 1; \
+    const int2 d = (int2)(e % 3 - 1, e / 3 - 1); \
     const int2 c = nb[e]; \
-    for (int kk = 0; kk <= kc; ++kk) { \
-      if (kk == 0 && ex == 0 && ey == 0) continue; \
-      if (kk > 0 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
-      int ux = c.x, uy = c.y; \
-      if (kk > 0) { const int2 u = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = u.x; uy = u.y; } \
-      ux -= ex; \
-      uy -= ey; \
-      if (toroidal) { \
-        ux = sy_step(ux, ew); \
-        uy = sy_step(uy, eh); \
-      } else if (ux < 3 || uy < 3 || ux >= ew - 3 || uy >= eh - 3) { \
-        continue;  /*  its 7x7 would leave a bounded exemplar */ \
-      } \
-      int dup = 0; \
-      for (int k = 0; k < n; ++k) dup |= (cand[k].x == ux && cand[k].y == uy); \
-      if (!dup) cand[n++] = (int2)(ux, uy); \
+    if (e != 4) n = sy_candidate(cand, n, c - d, ew, eh, toroidal); \
+    if (kmode == 2 || (kmode == 1 && e == 4)) { \
+      n = sy_candidate(cand, n, C1[(long)c.y * ew + c.x] - d, ew, eh, toroidal); \
+      if (kc >= 2) n = sy_candidate(cand, n, C2[(long)c.y * ew + c.x] - d, ew, eh, toroidal); \
     } \
   } \
   if (n == 1) return; \
