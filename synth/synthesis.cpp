@@ -343,23 +343,30 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
     /*  Away from a bounded exemplar's border (every candidate but possibly s0) no mirroring is needed. */ \
     const int plain = toroidal || (cx >= 3 && cy >= 3 && cx < ew - 3 && cy < eh - 3); \
     const int inner_x = cx >= 3 && cx < ew - 3; \
+    /*  Squared differences summed in vector lanes; after rows 1, 3, 5 and 7 the lanes are */ \
+    /*  added up and a candidate that can no longer win is left (the sums only grow, so where it is */ \
+    /*  left does not change which candidate wins). */ \
     int d = 0; \
-    for (int dy = -3; dy <= 3 && d < bestd; ++dy) { \
+    IT acc = (IT)(0); \
+    for (int dy = -3; dy <= 3; ++dy) { \
       const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh); \
       global const VT* row = T + (long)uy * ew; \
       const IT* rr = ref + (dy + 3) * 7; \
       if (inner_x) { \
         /*  The common case: the row does not wrap, one contiguous run of 7 texels. */ \
-        d += ROWDIST(rr, row + cx - 3, dy == 0); \
+        acc += ROWDIST(rr, row + cx - 3, dy == 0); \
       } else { \
-        IT acc = (IT)(0); \
         for (int dx = -3; dx <= 3; ++dx) { \
           if (dx == 0 && dy == 0) continue; \
           const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew); \
           const IT e = rr[dx + 3] - CONVERT(row[ux]); \
           acc += e * e; \
         } \
+      } \
+      if (dy & 1) { \
         d += HSUM(acc); \
+        acc = (IT)(0); \
+        if (d >= bestd) break; \
       } \
     } \
     if (d < bestd) { bestd = d; best = cand[k]; } \
@@ -370,18 +377,18 @@ int sy_hsum8(int8 a) { const int4 a4 = a.lo + a.hi; const int2 a2 = a4.lo + a4.h
 int sy_hsum4(int4 a) { const int2 a2 = a.lo + a.hi; return a2.x + a2.y; }
 // The squared distance of a row of 7 texels (the centre one skipped when `centre`): per tap, as the
 // wrapping path does, for 8 channels.
-int sy_row8(const int8* rr, global const short8* t, int centre) {
+int8 sy_row8(const int8* rr, global const short8* t, int centre) {
   int8 acc = (int8)(0);
   for (int dx = 0; dx < 7; ++dx) {
     if (centre && dx == 3) continue;
     const int8 e = rr[dx] - convert_int8(t[dx]);
     acc += e * e;
   }
-  return sy_hsum8(acc);
+  return acc;
 }
 // ... for colour alone (short4 texels): the 7 texels are 28 contiguous shorts, loaded as 16 + 8 + 4
 // and compared in wide vectors (the same integer sum; the centre's lanes zeroed).
-int sy_row4(const int4* rr, global const short4* t, int centre) {
+int4 sy_row4(const int4* rr, global const short4* t, int centre) {
   global const short* ts = (global const short*)t;
   const int16 a = (int16)(rr[0], rr[1], rr[2], rr[3]);
   const int8 b = (int8)(rr[4], rr[5]);
@@ -391,8 +398,7 @@ int sy_row4(const int4* rr, global const short4* t, int centre) {
   const int4 ec = rr[6] - convert_int4(vload4(0, ts + 24));
   const int16 sa = ea * ea;
   const int8 s8 = sa.lo + sa.hi + eb * eb;
-  const int4 s4 = s8.lo + s8.hi + ec * ec;
-  return sy_hsum4(s4);
+  return s8.lo + s8.hi + ec * ec;
 }
 // Up to 8 channels as short8; colour alone (3 channels) as short4: half the loads and lanes, the
 // same sums (the padding lanes are zero).
