@@ -133,6 +133,7 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   int8 proj = (int8)(0);
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
+#pragma unroll
   for (int t = 0; t < 9; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
@@ -146,12 +147,14 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   int2 best = S[(long)j * w + i];  // kept if every candidate is refused
   int bestd = 0x7fffffff;
   const int margin = (!toroidal && 8 * spacing <= min(ew, eh)) ? spacing : 0;
+#pragma unroll
   for (int q = 0; q < 9; ++q) {
     {
       // The pixel's own coordinate first, so it wins ties.
       const int dx = odx[q], dy = ody[q];
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
       const int2 c = S[(long)nj * w + ni];
+#pragma unroll
       for (int kk = 0; kk < 2; ++kk) {
         int ux = c.x, uy = c.y;
         if (kk == 1) { const int2 u = C1[(long)c.y * ew + c.x]; ux = u.x; uy = u.y; }
