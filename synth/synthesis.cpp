@@ -326,8 +326,10 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   /*  The texels the synthesis has around p, row by row (7 per row, the centre zero and never used). */ \
   IT ref[49]; \
   if (i >= 3 && j >= 3 && i < w - 3 && j < h - 3) { \
+    _Pragma("unroll") \
     for (int dy = -3; dy <= 3; ++dy) { \
       global const int2* row = Sin + (long)(j + dy) * w + i - 3; \
+      _Pragma("unroll") \
       for (int dx = 0; dx < 7; ++dx) ref[(dy + 3) * 7 + dx] = CONVERT(T[(long)row[dx].y * ew + row[dx].x]); \
     } \
   } else { \
