@@ -312,7 +312,6 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
-  _Pragma("unroll") \
   for (int e = 0; e < 9; ++e) { \
     const int2 d = (int2)(e % 3 - 1, e / 3 - 1); \
     const int2 c = nb[e]; \
@@ -326,7 +325,6 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
   /*  The texels the synthesis has around p, row by row (7 per row, the centre zero and never used). */ \
   IT ref[49]; \
   if (i >= 3 && j >= 3 && i < w - 3 && j < h - 3) { \
-    _Pragma("unroll") \
     for (int dy = -3; dy <= 3; ++dy) { \
       global const int2* row = Sin + (long)(j + dy) * w + i - 3; \
       _Pragma("unroll") \
