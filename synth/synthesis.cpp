@@ -203,6 +203,7 @@ int sy_in_class(long x, long y, int parity) { return parity < 0 || (int)((x + y)
 // appearance vectors at the 24 taps p + d, 0 < max(|dx|, |dy|) <= 2, compared with those at u + d
 // (each appearance vector already describes a 5x5 neighbourhood, so the footprint is 9x9). The
 // pixel's current position competes as well and wins ties. Two sub-passes (checkerboard, above).
+#ifdef SY_EXTRA  // the second program (synth::Synthesizer::Device::extra)
 kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
                       global const char* A, int ew, int eh, int toroidal) {
   const int i = get_global_id(0), j = get_global_id(1);
@@ -265,6 +266,7 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
   }
   S[(long)j * w + i] = best;
 }
+#endif
 // Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
 // ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
 // of the 3x3 (C1[S[p + e]] - e; with --candidates 3 also C2[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
@@ -405,7 +407,9 @@ int4 sy_row4(const int4* rr, global const short4* t, int centre) {
 }
 // Up to 8 channels as short8; colour alone (3 channels) as short4: half the loads and lanes, the
 // same sums (the padding lanes are zero).
+#ifdef SY_EXTRA
 SY_REMATCH(sy_rematch, short8, int8, convert_int8, sy_hsum8, sy_row8)
+#endif
 SY_REMATCH(sy_rematch4, short4, int4, convert_int4, sy_hsum4, sy_row4)
 )CL";
 
@@ -438,7 +442,10 @@ struct Synthesizer::DeviceLevel {
 };
 
 struct Synthesizer::Device {
-  cl::Program program;
+  // The kernels every synthesis uses; the seam refinement and the re-match of colour + maps
+  // (short8) are in a second program built with SY_EXTRA, loaded only when needed (PoCL's binary
+  // load time grows with the code in a program: ~1 ms less for the default command).
+  cl::Program program, extra;
   cl::Kernel upsample, correct, refine, rematch, rematch4;
   cl::Buffer texels;
   int texel_channels = 0;
@@ -529,8 +536,6 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
-    device_->refine = cl::Kernel(device_->program, "sy_refine");
-    device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     device_->rematch4 = cl::Kernel(device_->program, "sy_rematch4");
     return 0;
   });
@@ -692,6 +697,15 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           std::swap(S, other);
         }
       };
+      const bool eight = dev.texel_channels > 4;
+      if ((o.refine_passes > 0 || (rematch > 0 && eight)) && !dev.extra()) {
+        dev.extra = ocl::Runtime::instance().program(kSource, "-cl-std=CL1.2 -DSY_EXTRA");
+        ocl::with_cl_errors("creating the synthesis kernels", [&] {
+          dev.refine = cl::Kernel(dev.extra, "sy_refine");
+          dev.rematch = cl::Kernel(dev.extra, "sy_rematch");
+          return 0;
+        });
+      }
       run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
           static_cast<cl_int>(a.toroidal ? 1 : 0));
       if (o.refine_passes > 0) phase("seam refinement");
@@ -700,7 +714,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       // Each sub-pass: S is copied to the other buffer, then the matching kernel runs over this
       // sub-pass's colour of the checkerboard (half the pixels) and writes the ones it changes.
       if (rematch > 0) {
-        cl::Kernel& match = dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch;
+        cl::Kernel& match = eight ? dev.rematch : dev.rematch4;
         for (int sub = 0; sub < 2 * rematch; ++sub) {
           ocl::with_cl_errors("copying a synthesis level", [&] {
             return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, other, 0, 0, count * sizeof(cl_int2));
