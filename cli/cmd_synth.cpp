@@ -36,6 +36,7 @@ struct SynthCliOptions {
   int finest_passes = synth::SynthOptions{}.finest_passes;
   int refine_passes = synth::SynthOptions{}.refine_passes;
   int rematch_passes = synth::SynthOptions{}.rematch_passes;
+  int rematch_candidate_passes = synth::SynthOptions{}.rematch_candidate_passes;
   int layout_shifts = synth::SynthOptions{}.layout_shifts;
   float break_pieces = synth::SynthOptions{}.break_pieces;
   float layout_min_correlation = synth::SynthOptions{}.layout_min_correlation;
@@ -249,6 +250,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
   options.finest_passes = o.finest_passes;
   options.refine_passes = o.refine_passes;
   options.rematch_passes = o.rematch_passes;
+  options.rematch_candidate_passes = o.rematch_candidate_passes;
   options.layout_shifts = o.layout_shifts;
   options.break_pieces = o.break_pieces;
   options.layout_min_correlation = o.layout_min_correlation;
@@ -386,6 +388,7 @@ void run(const SynthCliOptions& o, const GlobalOptions& global) {
                 {"finest_passes", options.finest_passes},
                 {"refine_seams", options.refine_passes},
                 {"rematch", options.rematch_passes},
+                {"rematch_candidates", options.rematch_candidate_passes},
                 {"layout_shifts", options.layout_shifts},
                 {"break_pieces", options.break_pieces},
                 {"layout_min_correlation", options.layout_min_correlation},
@@ -459,6 +462,11 @@ void add_synth_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--rematch", o->rematch_passes,
                   "Final re-match passes at the finest level (0..8): pixels on a join take, among their "
                   "neighbours' patches and k-coherence candidates, the one whose 7x7 texels match best")
+      ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd->add_option("--rematch-candidates", o->rematch_candidate_passes,
+                  "How many re-match passes, from the first, also try the k-coherence candidates (0..8; later "
+                  "passes try only the neighbours' patches; 2 with --finest-passes 1 = the earlier defaults: "
+                  "~25% more CPU for 0.01 better median bench coherence)")
       ->capture_default_str()->check(CLI::Range(0, 8));
   cmd->add_option("--layout-shifts", o->layout_shifts,
                   "Shift the first level's blocks only by the exemplar's K most self-similar translations "

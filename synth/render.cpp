@@ -44,6 +44,10 @@ struct Palette {
   PixelType type;
   size_t texel_bytes = 0;
   std::vector<unsigned char> bytes;
+  // 8-bit palettes: each texel's three codes in 21-bit lanes of one integer (c0 | c1 << 21 |
+  // c2 << 42), so the seam blend adds a weighted texel with one multiply-add; a lane holds up to
+  // 2^21 - 1 >= 255 (R + 1)^4 for blend radii R <= 8, so the lanes never carry into each other.
+  std::vector<uint64_t> packed;
 };
 
 Palette make_palette(const Image& src, PixelType type) {
@@ -69,6 +73,11 @@ Palette make_palette(const Image& src, PixelType type) {
     } else {
       p.bytes[i] = static_cast<unsigned char>(code);
     }
+  }
+  if (!wide) {
+    p.packed.resize(n);
+    for (size_t t = 0; t < n; ++t)
+      p.packed[t] = uint64_t(p.bytes[3 * t]) | uint64_t(p.bytes[3 * t + 1]) << 21 | uint64_t(p.bytes[3 * t + 2]) << 42;
   }
   return p;
 }
@@ -249,6 +258,9 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
         // tap, with 1-3 texel reads per row instead of 2R + 1. (Three scalar accumulators: summing into an array kept it in memory, a
         // store-to-load chain that cost a third of the blend.)
         int64_t s0 = 0, s1 = 0, s2 = 0, iweight = 0;
+        uint64_t lanes = 0;  // 8-bit codes in 21-bit lanes (Palette::packed)
+        const bool swar = !wide && R <= 8;
+        const uint64_t* packed = pal.packed.data();
         int64_t first = -1;
         bool same = true;
         const unsigned char* bytes = pal.bytes.data();
@@ -266,7 +278,9 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
           if (first < 0) first = texel;
           same = same && texel == first;
           const unsigned char* b = bytes + static_cast<size_t>(texel) * tb;
-          if (wide) {
+          if (swar) {
+            lanes += static_cast<uint64_t>(wk) * packed[texel];
+          } else if (wide) {
             uint16_t v[3];
             std::memcpy(v, b, 6);
             s0 += wk * v[0], s1 += wk * v[1], s2 += wk * v[2];
@@ -287,6 +301,11 @@ void blend_strip(const Palette& pal, bool normal, const SeamBlend& sb, const std
         if (same) {  // inside a patch: a verbatim copy (all of the texel's bytes)
           std::memcpy(dst, &pal.bytes[static_cast<size_t>(first) * tb], tb);
           continue;
+        }
+        if (swar) {
+          const uint64_t mask = (uint64_t(1) << 21) - 1;
+          s0 = static_cast<int64_t>(lanes & mask), s1 = static_cast<int64_t>((lanes >> 21) & mask);
+          s2 = static_cast<int64_t>(lanes >> 42);
         }
         const int64_t isum[3] = {s0, s1, s2};
         for (int c = 0; c < 3; ++c) {

@@ -34,6 +34,20 @@ uint sy_hash_pos(long x, long y, uint level, uint seed, uint lane) {
 int sy_wrap(int x, int n) { int r = x % n; return r < 0 ? r + n : r; }
 int sy_reflect(int x, int n) { const int p = 2 * n - 2; x = sy_wrap(x, p); return x >= n ? p - x : x; }
 long sy_wrapl(long x, long n) { long r = x % n; return r < 0 ? r + n : r; }
+int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
+// Whether the 8 neighbours q[+-1], q[+-w +- 1] of a pixel at exemplar position s0 all continue its
+// patch, i.e. neighbour d holds s0 + h d (wrapped on a torus; h at most the exemplar's side): the
+// three expected columns and rows are computed once and each neighbour is one 64-bit comparison.
+int sy_inside(global const int2* q, int w, int2 s0, int h, int ew, int eh, int toroidal) {
+  int xm = s0.x - h, xp = s0.x + h, ym = s0.y - h, yp = s0.y + h;
+  if (toroidal) { xm = sy_step(xm, ew); xp = sy_step(xp, ew); ym = sy_step(ym, eh); yp = sy_step(yp, eh); }
+  const long a = as_long((int2)(xm, ym)), b = as_long((int2)(s0.x, ym)), c = as_long((int2)(xp, ym));
+  const long d = as_long((int2)(xm, s0.y)), e = as_long((int2)(xp, s0.y));
+  const long f = as_long((int2)(xm, yp)), g = as_long((int2)(s0.x, yp)), k = as_long((int2)(xp, yp));
+  global const long* r = (global const long*)q;
+  return (r[-w - 1] == a) & (r[-w] == b) & (r[-w + 1] == c) & (r[-1] == d) & (r[1] == e) & (r[w - 1] == f) &
+         (r[w] == g) & (r[w + 1] == k);
+}
 
 // S_l[q] = S_{l-1}[q / 2] + floor(h_l (d - 1/2)) + J_l(q),  J = floor(h_l r_l H(q) + 1/2).
 kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, int parent_zero,
@@ -84,23 +98,31 @@ kernel void sy_upsample(global const int2* parent, int pw, long pox, long poy, i
 // One correction sub-pass: the pixels whose absolute coordinates have parity (parx, pary). The
 // other classes are read only, so the update in place is race-free and order-independent.
 void sy_correct_px(global int2* S, int i, int j, int w, int h,
-                   global const char* A, global const short* NE, global const int* C1,
+                   global const char* A, global const short* NE, global const int2* C1,
                    constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   // Inside a patch (the 8 neighbours continue this pixel's exemplar position, S[p + d] = S[p] + h d,
   // without wrapping a bounded exemplar) every coherent candidate is the pixel's own position:
   // keep it. Only the pixels on a join between patches are matched; at the finer levels, where
   // patches are large, that is a small share of the pixels.
+  // While the spacing is at most the exemplar's smaller side, every position wrapped below lies in
+  // (-n, 2n), where one step is the modulo (no division).
+  const int near = spacing <= min(ew, eh);
   {
     const int2 s0 = S[(long)j * w + i];
     int inside = 1;
-    for (int dy = -1; dy <= 1 && inside; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (dx == 0 && dy == 0) continue;
-        const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
-        const int2 c = S[(long)nj * w + ni];
-        int ex = s0.x + (ni - i) * spacing, ey = s0.y + (nj - j) * spacing;
-        if (toroidal) { ex = sy_wrap(ex, ew); ey = sy_wrap(ey, eh); }
-        if (c.x != ex || c.y != ey) { inside = 0; break; }
+    if (near && i > 0 && j > 0 && i < w - 1 && j < h - 1) {
+      // Away from the window's border: no clamping (the same test).
+      inside = sy_inside(S + (long)j * w + i, w, s0, spacing, ew, eh, toroidal);
+    } else {
+      for (int dy = -1; dy <= 1 && inside; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (dx == 0 && dy == 0) continue;
+          const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
+          const int2 c = S[(long)nj * w + ni];
+          int ex = s0.x + (ni - i) * spacing, ey = s0.y + (nj - j) * spacing;
+          if (toroidal) { ex = sy_wrap(ex, ew); ey = sy_wrap(ey, eh); }
+          if (c.x != ex || c.y != ey) { inside = 0; break; }
+        }
       }
     }
     if (inside) return;
@@ -111,6 +133,7 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   int8 proj = (int8)(0);
   const int odx[9] = {0, -1, 0, 1, -1, 1, -1, 0, 1};
   const int ody[9] = {0, -1, -1, -1, 0, 0, 1, 1, 1};
+#pragma unroll
   for (int t = 0; t < 9; ++t) {
     const int ni = clamp(i + tdx[t], 0, w - 1), nj = clamp(j + tdy[t], 0, h - 1);
     const int2 c = S[(long)nj * w + ni];
@@ -124,21 +147,26 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   int2 best = S[(long)j * w + i];  // kept if every candidate is refused
   int bestd = 0x7fffffff;
   const int margin = (!toroidal && 8 * spacing <= min(ew, eh)) ? spacing : 0;
+#pragma unroll
   for (int q = 0; q < 9; ++q) {
     {
       // The pixel's own coordinate first, so it wins ties.
       const int dx = odx[q], dy = ody[q];
       const int ni = clamp(i + dx, 0, w - 1), nj = clamp(j + dy, 0, h - 1);
       const int2 c = S[(long)nj * w + ni];
+#pragma unroll
       for (int kk = 0; kk < 2; ++kk) {
         int ux = c.x, uy = c.y;
-        if (kk == 1) { const int idx = C1[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; }
+        if (kk == 1) { const int2 u = C1[(long)c.y * ew + c.x]; ux = u.x; uy = u.y; }
         ux -= dx * spacing;
         uy -= dy * spacing;
         if (!toroidal) {
           // A bounded exemplar: no candidate that came across its border, and at the finer levels
           // none whose neighbourhood would leave it (patches never run across the border).
           if (ux < margin || ux >= ew - margin || uy < margin || uy >= eh - margin) continue;
+        } else if (near) {
+          ux = sy_step(ux, ew);
+          uy = sy_step(uy, eh);
         } else {
           ux = sy_wrap(ux, ew);
           uy = sy_wrap(uy, eh);
@@ -155,7 +183,7 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
   S[(long)j * w + i] = best;
 }
 kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
-                       global const char* A, global const short* NE, global const int* C1,
+                       global const char* A, global const short* NE, global const int2* C1,
                        constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
@@ -175,6 +203,7 @@ int sy_in_class(long x, long y, int parity) { return parity < 0 || (int)((x + y)
 // appearance vectors at the 24 taps p + d, 0 < max(|dx|, |dy|) <= 2, compared with those at u + d
 // (each appearance vector already describes a 5x5 neighbourhood, so the footprint is 9x9). The
 // pixel's current position competes as well and wins ties. Two sub-passes (checkerboard, above).
+#ifdef SY_EXTRA  // the second program (synth::Synthesizer::Device::extra)
 kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity,
                       global const char* A, int ew, int eh, int toroidal) {
   const int i = get_global_id(0), j = get_global_id(1);
@@ -237,68 +266,79 @@ kernel void sy_refine(global const int2* Sin, global int2* S, int w, int h, long
   }
   S[(long)j * w + i] = best;
 }
+#endif
 // Final re-match at the finest level: a pixel on a join takes, among its own position (which wins
 // ties), the coherent candidates of its 8 neighbours (S[p + e] - e) and the k-coherence candidates
 // of the 3x3 (C1[S[p + e]] - e; with --candidates 3 also C2[S[p + e]] - e), the one whose 7x7 texels best match the texels the synthesis has
 // around p (48 taps, the centre excluded; the first 8 channels, quantised). Two sub-passes
 // (checkerboard, above).
-int sy_step(int x, int n) { return x < 0 ? x + n : (x >= n ? x - n : x); }  // |x| < 2n only
 // T holds the texels' first 8 channels as short8 (zero-padded): one vector load and one vector
 // multiply-add per tap, summed over a row before the early-exit test (integer sums: the same result
 // as the channel-by-channel loop).
-#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM) \
+// Appends candidate u (wrapped on a torus; on a bounded exemplar refused when its 7x7 would leave
+// it) unless it is already in the list; returns the new count. The order of the calls is the
+// order of the list, and the first of equally good candidates wins.
+int sy_candidate(int2* cand, int n, int2 u, int ew, int eh, int toroidal) {
+  if (toroidal) {
+    u.x = sy_step(u.x, ew);
+    u.y = sy_step(u.y, eh);
+  } else if (u.x < 3 || u.y < 3 || u.x >= ew - 3 || u.y >= eh - 3) {
+    return n;
+  }
+  const long l = as_long(u);
+  int dup = 0;
+  for (int k = 0; k < n; ++k) dup |= as_long(cand[k]) == l;
+  if (!dup) cand[n++] = u;
+  return n;
+}
+#define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
 kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
-                       global const VT* T, global const int* C1, global const int* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
-  const int i = get_global_id(0), j = get_global_id(1); \
-  if (i >= w || j >= h) return; \
-  const int2 s0 = Sin[(long)j * w + i]; \
-  S[(long)j * w + i] = s0; \
-  if (!sy_in_class(ox + i, oy + j, parity)) return; \
-  /*  Inside a patch (every neighbour continues this pixel's position) the 7x7 matches exactly: keep. */ \
-  int inside = 1; \
-  for (int e = 0; e < 9 && inside; ++e) { \
-    const int ni = clamp(i + e % 3 - 1, 0, w - 1), nj = clamp(j + e / 3 - 1, 0, h - 1); \
-    const int2 c = Sin[(long)nj * w + ni]; \
-    int ux = c.x - (ni - i), uy = c.y - (nj - j); \
-    if (toroidal) { ux = sy_step(ux, ew); uy = sy_step(uy, eh); } \
-    inside = ux == s0.x && uy == s0.y; \
+                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
+  /*  One work-item per pixel of this sub-pass's colour (S already holds a copy of Sin). The window's */ \
+  /*  outermost ring is never re-matched (its 3x3 would be clamped): it lies in the padding, which the */ \
+  /*  re-match's reach (3 px per sub-pass) never carries into the window. */ \
+  const int j = get_global_id(1); \
+  if (j >= h) return; \
+  const int i = (int)((parity - ((ox + oy + j) & 1)) & 1) + 2 * (int)get_global_id(0); \
+  if (i >= w - 1 || i == 0 || j == 0 || j == h - 1) return; \
+  const long p = (long)j * w + i; \
+  const int2 s0 = Sin[p]; \
+  /*  The 3x3 around p (no clamping: p is not on the ring), row by row. */ \
+  global const int2* q = Sin + p; \
+  { \
+    /*  Inside a patch (every neighbour d continues it: S[p + d] - d = S[p], toroidal: modulo) the 7x7 */ \
+    /*  matches exactly: keep. */ \
+    if (sy_inside(q, w, s0, 1, ew, eh, toroidal)) return; \
   } \
-  if (inside) return; \
+  const int2 nb[9] = {q[-w - 1], q[-w], q[-w + 1], q[-1], s0, q[1], q[w - 1], q[w], q[w + 1]}; \
   int2 cand[27]; \
   int n = 0; \
   cand[n++] = s0; \
   for (int e = 0; e < 9; ++e) { \
-    const int ex = e % 3 - 1, ey = e / 3 - 1; \
-    const int ni = clamp(i + ex, 0, w - 1), nj = clamp(j + ey, 0, h - 1); \
-    const int2 c = Sin[(long)nj * w + ni]; \
-    for (int kk = 0; kk <= kc; ++kk) { \
-      if (kk == 0 && ex == 0 && ey == 0) continue; \
-      if (kk > 0 && (kmode == 0 || (kmode == 1 && (ex != 0 || ey != 0)))) continue; \
-      int ux = c.x, uy = c.y; \
-      if (kk > 0) { const int idx = (kk == 1 ? C1 : C2)[(long)c.y * ew + c.x]; ux = idx % ew; uy = idx / ew; } \
-      ux -= ni - i; \
-      uy -= nj - j; \
-      if (toroidal) { \
-        ux = sy_step(ux, ew); \
-        uy = sy_step(uy, eh); \
-      } else if (ux < 3 || uy < 3 || ux >= ew - 3 || uy >= eh - 3) { \
-        continue;  /*  its 7x7 would leave a bounded exemplar */ \
-      } \
-      int dup = 0; \
-      for (int k = 0; k < n; ++k) dup |= (cand[k].x == ux && cand[k].y == uy); \
-      if (!dup) cand[n++] = (int2)(ux, uy); \
+    const int2 d = (int2)(e % 3 - 1, e / 3 - 1); \
+    const int2 c = nb[e]; \
+    if (e != 4) n = sy_candidate(cand, n, c - d, ew, eh, toroidal); \
+    if (kmode == 2 || (kmode == 1 && e == 4)) { \
+      n = sy_candidate(cand, n, C1[(long)c.y * ew + c.x] - d, ew, eh, toroidal); \
+      if (kc >= 2) n = sy_candidate(cand, n, C2[(long)c.y * ew + c.x] - d, ew, eh, toroidal); \
     } \
   } \
   if (n == 1) return; \
-  /*  The texels the synthesis has around p. */ \
-  IT ref[48]; \
-  int t = 0; \
-  for (int dy = -3; dy <= 3; ++dy) { \
-    const int nj = clamp(j + dy, 0, h - 1); \
-    for (int dx = -3; dx <= 3; ++dx) { \
-      if (dx == 0 && dy == 0) continue; \
-      const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)]; \
-      ref[t++] = CONVERT(T[(long)q.y * ew + q.x]); \
+  /*  The texels the synthesis has around p, row by row (7 per row, the centre zero and never used). */ \
+  IT ref[49]; \
+  if (i >= 3 && j >= 3 && i < w - 3 && j < h - 3) { \
+    for (int dy = -3; dy <= 3; ++dy) { \
+      global const int2* row = Sin + (long)(j + dy) * w + i - 3; \
+      _Pragma("unroll") \
+      for (int dx = 0; dx < 7; ++dx) ref[(dy + 3) * 7 + dx] = CONVERT(T[(long)row[dx].y * ew + row[dx].x]); \
+    } \
+  } else { \
+    for (int dy = -3; dy <= 3; ++dy) { \
+      const int nj = clamp(j + dy, 0, h - 1); \
+      for (int dx = -3; dx <= 3; ++dx) { \
+        const int2 q = Sin[(long)nj * w + clamp(i + dx, 0, w - 1)]; \
+        ref[(dy + 3) * 7 + dx + 3] = CONVERT(T[(long)q.y * ew + q.x]); \
+      } \
     } \
   } \
   int2 best = s0; \
@@ -308,29 +348,31 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
     /*  Away from a bounded exemplar's border (every candidate but possibly s0) no mirroring is needed. */ \
     const int plain = toroidal || (cx >= 3 && cy >= 3 && cx < ew - 3 && cy < eh - 3); \
     const int inner_x = cx >= 3 && cx < ew - 3; \
+    /*  Squared differences summed in vector lanes; after rows 1, 3, 5 and 7 the lanes are */ \
+    /*  added up and a candidate that can no longer win is left (the sums only grow, so where it is */ \
+    /*  left does not change which candidate wins). */ \
     int d = 0; \
-    t = 0; \
-    for (int dy = -3; dy <= 3 && d < bestd; ++dy) { \
+    IT acc = (IT)(0); \
+    for (int dy = -3; dy <= 3; ++dy) { \
       const int uy = plain ? sy_step(cy + dy, eh) : sy_reflect(cy + dy, eh); \
       global const VT* row = T + (long)uy * ew; \
-      IT acc = (IT)(0); \
+      const IT* rr = ref + (dy + 3) * 7; \
       if (inner_x) { \
-        /*  The common case: the row does not wrap, no index arithmetic per tap. */ \
-        global const VT* r = row + cx; \
-        for (int dx = -3; dx <= 3; ++dx) { \
-          if (dx == 0 && dy == 0) continue; \
-          const IT e = ref[t++] - CONVERT(r[dx]); \
-          acc += e * e; \
-        } \
+        /*  The common case: the row does not wrap, one contiguous run of 7 texels. */ \
+        acc += ROWDIST(rr, row + cx - 3, dy == 0); \
       } else { \
         for (int dx = -3; dx <= 3; ++dx) { \
           if (dx == 0 && dy == 0) continue; \
           const int ux = plain ? sy_step(cx + dx, ew) : sy_reflect(cx + dx, ew); \
-          const IT e = ref[t++] - CONVERT(row[ux]); \
+          const IT e = rr[dx + 3] - CONVERT(row[ux]); \
           acc += e * e; \
         } \
       } \
-      d += HSUM(acc); \
+      if (dy & 1) { \
+        d += HSUM(acc); \
+        acc = (IT)(0); \
+        if (d >= bestd) break; \
+      } \
     } \
     if (d < bestd) { bestd = d; best = cand[k]; } \
   } \
@@ -338,10 +380,37 @@ kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, 
 }
 int sy_hsum8(int8 a) { const int4 a4 = a.lo + a.hi; const int2 a2 = a4.lo + a4.hi; return a2.x + a2.y; }
 int sy_hsum4(int4 a) { const int2 a2 = a.lo + a.hi; return a2.x + a2.y; }
+// The squared distance of a row of 7 texels (the centre one skipped when `centre`): per tap, as the
+// wrapping path does, for 8 channels.
+int8 sy_row8(const int8* rr, global const short8* t, int centre) {
+  int8 acc = (int8)(0);
+  for (int dx = 0; dx < 7; ++dx) {
+    if (centre && dx == 3) continue;
+    const int8 e = rr[dx] - convert_int8(t[dx]);
+    acc += e * e;
+  }
+  return acc;
+}
+// ... for colour alone (short4 texels): the 7 texels are 28 contiguous shorts, loaded as 16 + 8 + 4
+// and compared in wide vectors (the same integer sum; the centre's lanes zeroed).
+int4 sy_row4(const int4* rr, global const short4* t, int centre) {
+  global const short* ts = (global const short*)t;
+  const int16 a = (int16)(rr[0], rr[1], rr[2], rr[3]);
+  const int8 b = (int8)(rr[4], rr[5]);
+  int16 ea = a - convert_int16(vload16(0, ts));
+  if (centre) ea.hi.hi = (int4)(0);
+  const int8 eb = b - convert_int8(vload8(0, ts + 16));
+  const int4 ec = rr[6] - convert_int4(vload4(0, ts + 24));
+  const int16 sa = ea * ea;
+  const int8 s8 = sa.lo + sa.hi + eb * eb;
+  return s8.lo + s8.hi + ec * ec;
+}
 // Up to 8 channels as short8; colour alone (3 channels) as short4: half the loads and lanes, the
 // same sums (the padding lanes are zero).
-SY_REMATCH(sy_rematch, short8, int8, convert_int8, sy_hsum8)
-SY_REMATCH(sy_rematch4, short4, int4, convert_int4, sy_hsum4)
+#ifdef SY_EXTRA
+SY_REMATCH(sy_rematch, short8, int8, convert_int8, sy_hsum8, sy_row8)
+#endif
+SY_REMATCH(sy_rematch4, short4, int4, convert_int4, sy_hsum4, sy_row4)
 )CL";
 
 struct Region {
@@ -367,15 +436,20 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
 
 }  // namespace
 
+struct Synthesizer::DeviceLevel {
+  cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
+  bool has_candidates = false, has_matching = false;
+};
+
 struct Synthesizer::Device {
-  cl::Program program;
+  // The kernels every synthesis uses; the seam refinement and the re-match of colour + maps
+  // (short8) are in a second program built with SY_EXTRA, loaded only when needed (PoCL's binary
+  // load time grows with the code in a program: ~1 ms less for the default command).
+  cl::Program program, extra;
   cl::Kernel upsample, correct, refine, rematch, rematch4;
   cl::Buffer texels;
   int texel_channels = 0;
-  struct Level {
-    cl::Buffer appearance, neighbourhood, coherent, coherent2, projection;
-  };
-  std::vector<Level> levels;
+  std::vector<DeviceLevel> levels;
 };
 
 void check_options(const Analysis& a, const SynthOptions& o) {
@@ -412,6 +486,8 @@ void check_options(const Analysis& a, const SynthOptions& o) {
   if (o.finest_passes < -1 || o.finest_passes > 8) throw UsageError("--finest-passes must be in [0, 8]");
   if (o.refine_passes < 0 || o.refine_passes > 8) throw UsageError("--refine-seams must be in [0, 8]");
   if (o.rematch_passes < 0 || o.rematch_passes > 8) throw UsageError("--rematch must be in [0, 8]");
+  if (o.rematch_candidate_passes < 0 || o.rematch_candidate_passes > 8)
+    throw UsageError("--rematch-candidates must be in [0, 8]");
   if (!(o.layout_min_correlation >= -1 && o.layout_min_correlation <= 1))
     throw UsageError(fmt::format("--layout-min-correlation must be in [-1, 1], got {}", o.layout_min_correlation));
   if (!(o.break_pieces >= 0 && o.break_pieces <= 1))
@@ -460,8 +536,6 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
   ocl::with_cl_errors("creating the synthesis kernels", [&] {
     device_->upsample = cl::Kernel(device_->program, "sy_upsample");
     device_->correct = cl::Kernel(device_->program, "sy_correct");
-    device_->refine = cl::Kernel(device_->program, "sy_refine");
-    device_->rematch = cl::Kernel(device_->program, "sy_rematch");
     device_->rematch4 = cl::Kernel(device_->program, "sy_rematch4");
     return 0;
   });
@@ -478,20 +552,39 @@ Synthesizer::Synthesizer(const Analysis& analysis) : analysis_(analysis), device
     device_->texels = ocl::upload(t8);
     device_->texel_channels = C;
   }
-  for (const auto& lv : analysis.level) {
-    Device::Level d;
-    d.appearance = ocl::upload(lv.appearance);
-    d.neighbourhood = ocl::upload(lv.neighbourhood);
-    d.coherent = ocl::upload(lv.coherent);
-    // k = 2: the re-match never reads the third candidate (kc = 1); the buffer is a stand-in.
-    d.coherent2 = lv.coherent2.empty() ? d.coherent : ocl::upload(lv.coherent2);
-    d.projection = ocl::upload(lv.projection);
-    device_->levels.push_back(std::move(d));
-  }
+  // Levels are uploaded when a synthesis first needs them (level(l)): with the defaults the first
+  // two levels and level 0 are never corrected, and the finest level needs only its candidates.
+  device_->levels.resize(analysis.level.size());
   timing::mark("analysis upload to the device");
 }
 
 Synthesizer::~Synthesizer() = default;
+
+// Level l's buffers on the device: the correction's (appearance, neighbourhoods, candidates,
+// projection) or only the candidates (the re-match's), uploaded on first use.
+const Synthesizer::DeviceLevel& Synthesizer::level(int l, bool correction) {
+  auto& d = device_->levels[static_cast<size_t>(l)];
+  const AnalysisLevel& lv = analysis_.level[static_cast<size_t>(l)];
+  if (!d.has_candidates) {
+    // The k-coherence candidates as (x, y) pairs: no division per candidate in the kernels.
+    auto pairs = [&](const std::vector<int32_t>& idx) {
+      std::vector<cl_int2> xy(idx.size());
+      for (size_t i = 0; i < idx.size(); ++i) xy[i] = cl_int2{{idx[i] % analysis_.width, idx[i] / analysis_.width}};
+      return ocl::upload(xy);
+    };
+    d.coherent = pairs(lv.coherent);
+    // k = 2: the re-match never reads the third candidate (kc = 1); the buffer is a stand-in.
+    d.coherent2 = lv.coherent2.empty() ? d.coherent : pairs(lv.coherent2);
+    d.has_candidates = true;
+  }
+  if (correction && !d.has_matching) {
+    d.appearance = ocl::upload(lv.appearance);
+    d.neighbourhood = ocl::upload(lv.neighbourhood);
+    d.projection = ocl::upload(lv.projection);
+    d.has_matching = true;
+  }
+  return d;
+}
 
 std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptions& o) {
   const Analysis& a = analysis_;
@@ -578,8 +671,8 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
       timing::mark(fmt::format("level {} {} ({}x{})", l, what, r.w, r.h));
     };
     phase("upsample + jitter");
-    const auto& lv = dev.levels[l];
     const int level_passes = passes_at(a, o, l);
+    const auto& lv = level(l, level_passes > 0 || (l == L && o.refine_passes > 0));
     for (int pass = 0; pass < level_passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
@@ -604,15 +697,36 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           std::swap(S, other);
         }
       };
+      const bool eight = dev.texel_channels > 4;
+      if ((o.refine_passes > 0 || (rematch > 0 && eight)) && !dev.extra()) {
+        dev.extra = ocl::Runtime::instance().program(kSource, "-cl-std=CL1.2 -DSY_EXTRA");
+        ocl::with_cl_errors("creating the synthesis kernels", [&] {
+          dev.refine = cl::Kernel(dev.extra, "sy_refine");
+          dev.rematch = cl::Kernel(dev.extra, "sy_rematch");
+          return 0;
+        });
+      }
       run(dev.refine, o.refine_passes, lv.appearance, static_cast<cl_int>(a.width), static_cast<cl_int>(a.height),
           static_cast<cl_int>(a.toroidal ? 1 : 0));
       if (o.refine_passes > 0) phase("seam refinement");
       // k = 3 (--candidates 3): the third candidate only here, where the 7x7 texels decide. In the
       // correction it made the bench worse (median coherence 5.05 -> 5.24; docs/synth.md, seventh pass).
-      run(dev.texel_channels <= 4 ? dev.rematch4 : dev.rematch, rematch, dev.texels, lv.coherent, lv.coherent2,
-          static_cast<cl_int>(a.candidates - 1),
-          static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-          static_cast<cl_int>(kRematchCoherence));
+      // Each sub-pass: S is copied to the other buffer, then the matching kernel runs over this
+      // sub-pass's colour of the checkerboard (half the pixels) and writes the ones it changes.
+      if (rematch > 0) {
+        cl::Kernel& match = eight ? dev.rematch : dev.rematch4;
+        for (int sub = 0; sub < 2 * rematch; ++sub) {
+          ocl::with_cl_errors("copying a synthesis level", [&] {
+            return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, other, 0, 0, count * sizeof(cl_int2));
+          });
+          launch2d(match, (r.w + 1) / 2, r.h, S, other, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
+                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1), dev.texels,
+                   lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1),
+                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
+                   static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
+          std::swap(S, other);
+        }
+      }
     }
     if (l == L && rematch > 0) phase("re-match");
     parent = S;

@@ -48,7 +48,11 @@ struct SynthOptions {
   // Passes at the finest level (the most pixels), overriding `passes` there; -1 = as `passes`.
   // 1 (issue 13, fourth pass): with two re-match passes after it, a second correction pass changed
   // no bench measure by more than 0.02 and cost ~12 ms CPU of a 512^2 run (docs/synth.md).
-  int finest_passes = 1;
+  // 0 since session 12: the re-match that follows joins the patches on the bench's own 7x7
+  // footprint; without the correction before it the bench median coherence stays at 5.06 (5.06
+  // with it, 5.05 with both re-match passes on k-coherence candidates), for ~12 ms less CPU and
+  // 4 px less padding per 512^2 command.
+  int finest_passes = 0;
   // Seam refinement passes at the finest level (each 2 checkerboard sub-passes): pixels on a join
   // take the neighbour's patch whose 9x9 surroundings (appearance vectors) match best, moving joins
   // to where the patches agree. 0 by default since the fourth pass: two re-match passes without it
@@ -62,6 +66,11 @@ struct SynthOptions {
   // surroundings best. 2: brick/grass/pave/rock coherence 4.01 / 5.14 / 6.82 / 5.53 against
   // 4.00 / 5.15 / 6.82 / 5.52 for the old defaults; one pass: 4.03 / 5.15 / 6.86 / 5.57.
   int rematch_passes = 2;
+  // How many re-match passes, from the first, also try the k-coherence candidates; the later ones try
+  // only the neighbours' patches (and the pixel's own position). 1 since session 12: the second pass
+  // with them cost ~15 ms CPU of a 512^2 run for 0.00-0.04 better bench coherence (median 5.05
+  // against 5.06; docs/synth.md, eighth pass).
+  int rematch_candidate_passes = 1;
   // Layout jitter restricted to structure-keeping shifts: at the first synthesised level a pixel
   // (a block of h_l x h_l output pixels) is shifted by one of the exemplar's `layout_shifts` most
   // self-similar translations (Analysis::shifts; drawn by the same position hash) instead of by a
@@ -143,6 +152,8 @@ class Synthesizer {
 
  private:
   struct Device;
+  struct DeviceLevel;  // one level's buffers, uploaded on first use
+  const DeviceLevel& level(int l, bool correction);
   const Analysis& analysis_;
   std::unique_ptr<Device> device_;
 };

@@ -77,7 +77,8 @@ TEST(SynthCli, WritesTheOutputAndReportsJson) {
   EXPECT_NE(r.out.find("\"layout_shifts\": 32"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"rematch\": 2"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"refine_seams\": 0"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("\"finest_passes\": 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"finest_passes\": 0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"rematch_candidates\": 1"), std::string::npos) << r.out;
   // The second run finds the analysis in the cache.
   const auto again = run_proctex(env(dir) + "synth '" + ex.string() + "' -o '" + (dir / "out2.png").string() +
                                      "' --size 200x120 --seed 9 --json",
@@ -345,6 +346,7 @@ TEST(SynthCli, BadInputIsOneLineAndLeavesNoFile) {
       {"synth '" + ex.string() + "'" + o + " --randomness 1,1,1,1,1,1,1,1,1,1", "levels", 2},
       {"synth '" + ex.string() + "'" + o + " --tileable --size 127", "even", 2},
       {"synth '" + ex.string() + "'" + o + " --rematch 9", "--rematch", 2},
+      {"synth '" + ex.string() + "'" + o + " --rematch-candidates 9", "--rematch-candidates", 2},
       {"synth '" + ex.string() + "'" + o + " --layout-shifts 65", "--layout-shifts", 2},
       {"synth '" + ex.string() + "'" + o + " --coords '" + (dir / "uv.png").string() + "'", ".exr", 2},
       {"synth '" + ex.string() + "' -o '" + (dir / "nodir" / "out.png").string() + "'", "does not exist", 1},

@@ -428,6 +428,9 @@ TEST(Synth, FinalRematchKeepsWindowsExactAndPatchesWhole) {
   SynthOptions bad;
   bad.rematch_passes = 9;
   EXPECT_THROW(s.synthesise({0, 0, 8, 8}, bad), UsageError);
+  bad = SynthOptions{};
+  bad.rematch_candidate_passes = -1;
+  EXPECT_THROW(s.synthesise({0, 0, 8, 8}, bad), UsageError);
 }
 
 TEST(Synth, ThreeCandidatesKeepWindowsExactAndChangeOnlyTheRematch) {
