@@ -64,11 +64,11 @@ std::string next_step(const search::MatchResult& r, const std::string& photo) {
                        r.image_rmse);
   if (r.verdict == "good")
     return fmt::format("next: render it at any size: proctex render SPEC.json -o big.png --size 4096 "
-                       "(the material is {:.0f}% likely right)", 100 * r.material_probability);
+                       "(the material is {:.0f}% likely by the selection)", 100 * r.probability);
   if (r.verdict == "approximate")
     return fmt::format("next: the material is uncertain ({} at {:.0f}%); compare with --compare side.png, try the "
                        "other likely materials with --shaders {}, or crop a clean region with --crop x,y,w,h",
-                       r.spec.shader, 100 * r.material_probability, others.empty() ? r.spec.shader : others);
+                       r.spec.shader, 100 * r.probability, others.empty() ? r.spec.shader : others);
   return "next: no shader of the library reproduces " + photo +
          "; synthesise more of it from the photo itself (exemplar synthesis), or crop a region with one material";
 }
@@ -191,8 +191,7 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
       "scales, plus the nearest catalogue samples), fits the colours of the best samples of the likely\n"
       "shaders, refines the best starts with NLopt (and polishes clean patterns exactly), and keeps the\n"
       "result that is both similar and a likely material.\n"
-      "Verdict: good (similarity >= 0.5 and a material probability at which 95% of the labelled photos\n"
-      "were the right material; or a clean pattern reproduced, similarity >= 0.75 or pixel-exact),\n"
+      "Verdict: good (similarity >= 0.5 and the material at least 95% likely, or similarity >= 0.75),\n"
       "approximate (>= 0.25), no-match (no shader expresses the photo). See docs/search.md.\n"
       "  proctex match brick.png --render match.png --size 4096 --compare cmp.png\n"
       "  proctex match wall.jpg --shaders bricks,tiles --fix rows=8 --budget 20s -o result.json\n"

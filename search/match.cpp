@@ -316,24 +316,8 @@ double pixel_exact_limit(const Image& target) {
   return std::min(kPixelExactRmse, kPixelExactShare * flat_rmse(target));
 }
 
-double material_probability(const VerdictEvidence& e) {
-  // The order of bench/rescore_final.py's FEATURES; logs floored at 1e-4 as there.
-  const double x[verdict_model::kFeatures] = {std::log(std::max(e.probability, 1e-4)),
-                                              std::log(std::max(e.similarity, 1e-4)), e.decision_margin,
-                                              e.similarity_margin, e.probability_lead};
-  double z = verdict_model::kIntercept;
-  for (int i = 0; i < verdict_model::kFeatures; ++i) z += verdict_model::kWeights[i] * x[i];
-  return 1.0 / (1.0 + std::exp(-z));
-}
-
-double look_alike_penalty(const std::string& shader) {
-  for (const auto& [name, bias] : verdict_model::kLookAlike)
-    if (shader == name) return verdict_model::kLookAlikeWeight * bias;
-  return 0.0;
-}
-
-std::string verdict_for(double s, double material, bool pattern) {
-  if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && material >= kGoodMaterialProbability)) return "good";
+std::string verdict_for(double s, double probability, bool pattern) {
+  if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
   if (s >= kApproximateMatch) return "approximate";
   return "no-match";
 }
@@ -363,7 +347,6 @@ nlohmann::json MatchResult::to_json() const {
           {"candidates", cands},     {"starts", starts},           {"timings", timings},
           {"catalogue", catalogue},
           {"selection_probability", probability},
-          {"material_probability", material_probability},
           {"pattern", pattern},
           {"pixel_exact", pixel_exact},
           {"visibly_other", visibly_other},
@@ -371,9 +354,7 @@ nlohmann::json MatchResult::to_json() const {
           {"image_rmse", image_rmse >= 0 ? nlohmann::json(image_rmse) : nlohmann::json(nullptr)},
           {"polish", polish},
           {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}}},
-          {"thresholds", {{"good", kGoodMatch}, {"good_material_probability", kGoodMaterialProbability},
-                          {"approximate", kApproximateMatch}}},
-          {"verdict_model", {{"version", verdict_model::kVersion}}}};
+          {"thresholds", {{"good", kGoodMatch}, {"good_probability", kGoodProbability}, {"approximate", kApproximateMatch}}}};
 }
 
 MatchResult match(const Image& target, catalog::Store& store, const MatchOptions& o,
@@ -1017,8 +998,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     return pixel_exact(c) ? 2e6 - c.image_rmse
            : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
-               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
-                     (pattern ? 0.0 : look_alike_penalty(c.from->decl->name));
+               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
   };
   const Candidate* final_choice = nullptr;
   const Candidate* most_similar = nullptr;
@@ -1026,30 +1006,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (!final_choice || score_of(c) > score_of(*final_choice)) final_choice = &c;
     if (!most_similar || c.similarity > most_similar->similarity) most_similar = &c;
   }
-  // The evidence the verdict weighs (bench/rescore_final.py's verdict_features).
-  const auto verdict_evidence = [&](const Candidate& chosen) {
-    const auto log_floor = [](double v) { return std::log(std::max(v, 1e-4)); };
-    VerdictEvidence e;
-    e.similarity = chosen.similarity;
-    e.probability = chosen.from->probability;
-    const double mine = log_floor(e.similarity) + o.selection_weight * log_floor(e.probability);
-    double other = mine - 3.0, other_s = 0.0;
-    bool any_other = false;
-    for (const auto& c : final_candidates) {
-      if (c.from->decl == chosen.from->decl) continue;
-      const double d = log_floor(c.similarity) + o.selection_weight * log_floor(c.from->probability);
-      other = any_other ? std::max(other, d) : d;
-      other_s = std::max(other_s, c.similarity);
-      any_other = true;
-    }
-    e.decision_margin = mine - other;
-    e.similarity_margin = e.similarity - other_s;
-    double other_p = 1e-4;
-    for (const auto& c : result.candidates)
-      if (c.shader != chosen.from->decl->name) other_p = std::max(other_p, c.probability);
-    e.probability_lead = log_floor(e.probability) - std::log(other_p);
-    return e;
-  };
   const bool outclassed = final_choice && score_of(*final_choice) < 1e6 && final_choice->similarity * kOutclassedRatio < most_similar->similarity;
   if (outclassed) final_choice = most_similar;
   if (final_choice) {
@@ -1062,7 +1018,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     result.pixel_exact = pixel_exact(c);
     result.visibly_other = visibly_other(c);
     result.outclassed = outclassed;
-    result.material_probability = material_probability(verdict_evidence(c));
     result.per_metric.clear();
     if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
       for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
@@ -1075,7 +1030,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // A seed-independent result that registers visibly off the target is not an exact recovery,
   // whatever its similarity: the clean-pattern rule (S >= kCertainMatch) does not make it good.
   result.verdict = result.pixel_exact ? "good"
-                                      : verdict_for(result.similarity, result.material_probability,
+                                      : verdict_for(result.similarity, result.probability,
                                                     result.pattern && !result.visibly_other);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above

@@ -21,7 +21,6 @@
 #include "image/image.h"
 #include "search/refine.h"
 #include "search/selection_model.h"
-#include "search/verdict_model.h"
 #include "shaders/spec.h"
 
 namespace proctex::catalog {
@@ -35,21 +34,9 @@ namespace proctex::search {
 inline constexpr double kGoodMatch = 0.5;         // as similar as another crop of the same texture
 inline constexpr double kApproximateMatch = 0.25;  // clearly closer than an unrelated texture
 // A similarity alone is gamed by flexible shaders (they refine into statistical look-alikes), so
-// "good" also needs the material to be likely right: the material probability (below), calibrated
-// on the labelled tune photos for 95% precision (docs/match-evaluation.md, session 12).
-inline constexpr double kGoodMaterialProbability = verdict_model::kGoodMaterialProbability;
-
-// What the matcher knows of its own answer, the inputs of the material probability.
-struct VerdictEvidence {
-  double similarity = 0;         // S of the answer
-  double probability = 0;        // its shader's selection probability P
-  double decision_margin = 0;    // log S + log P, minus the best other shader's among the final candidates
-  double similarity_margin = 0;  // S minus the best other shader's S among the final candidates
-  double probability_lead = 0;   // log P minus the log of the best other screened shader's P
-};
-// Probability that the answer's shader is the right kind of material (search/verdict_model.h:
-// a logistic model fitted on the tune photos' matches by bench/rescore_final.py).
-double material_probability(const VerdictEvidence& e);
+// "good" also needs the shader selection (selection.h) to find the material likely: the
+// threshold on its probability was calibrated on the labelled real photos (docs/match-evaluation.md).
+inline constexpr double kGoodProbability = selection_model::kGoodProbability;
 // ... or, for a clean pattern (a peaky spectrum: tilings, shapes; never a photo of a material), a
 // similarity an exact recovery reaches (0.75-0.95). On photos wrong materials reached 0.76
 // (measured on the labelled set), so there the similarity alone never makes a match good. Such a
@@ -86,14 +73,8 @@ inline constexpr double kOutclassedRatio = 2.25;
 // similarity as a likelihood and the selection as the prior, with equal say.
 inline constexpr double kSelectionWeight = 1.0;
 
-// What the final choice takes off a flexible shader's log S + log P on a photo: how similar its
-// race lanes got, on average, to tune photos of other materials (search/verdict_model.h). A shader
-// that reaches a high similarity on everything gains less evidence from reaching it here.
-double look_alike_penalty(const std::string& shader);
-
-// "good", "approximate" or "no-match". `material`: the material probability; `pattern`: the
-// target is a clean pattern (see MatchResult).
-std::string verdict_for(double similarity, double material, bool pattern);
+// "good", "approximate" or "no-match". `pattern`: the target is a clean pattern (see MatchResult).
+std::string verdict_for(double similarity, double probability, bool pattern);
 
 // Candidate shaders screened by default: the structural scan of the catalogue (full-resolution
 // features, no rendering) puts the right shader among its first few; screening costs renders.
@@ -135,7 +116,6 @@ struct MatchResult {
   TextureSpec spec;
   double similarity = 0.0;                  // default metric at `resolution`
   double probability = 0.0;                 // selection probability of the matched shader
-  double material_probability = 0.0;        // calibrated probability that the shader is the right material
   bool pattern = false;                     // the target is a clean pattern (peaky spectrum)
   std::map<std::string, double> per_metric;  // components of the default metric
   std::string verdict;

@@ -250,7 +250,7 @@ TEST(Match, ReportedSimilarityIsReproducibleFromTheSpec) {
   const metrics::Metric& m = metrics::default_metric();
   const double again = m.similarity(m.features(target, 256), m.features(render(r.spec), 256));
   EXPECT_NEAR(again, r.similarity, 1e-6) << describe(r);
-  EXPECT_EQ(r.verdict, r.pixel_exact ? "good" : verdict_for(r.similarity, r.material_probability, r.pattern && !r.visibly_other));
+  EXPECT_EQ(r.verdict, r.pixel_exact ? "good" : verdict_for(r.similarity, r.probability, r.pattern && !r.visibly_other));
 }
 
 // Targets no shader of the library can express. A verdict only means something if a failed match
@@ -360,12 +360,12 @@ TEST_F(MatchCli, JsonResultRenderAndCompare) {
   const double s = j["similarity"];
   EXPECT_GT(s, 0.0);
   EXPECT_LE(s, 1.0);
-  // "good" also needs the material to be likely right (search/match.h).
-  const double p = j["material_probability"];
+  // "good" also needs the selection to find the material likely (search/match.h).
+  const double p = j["selection_probability"];
   EXPECT_GE(p, 0.0);
   EXPECT_LE(p, 1.0);
   const bool pattern = j["pattern"];
-  EXPECT_EQ(j["verdict"], (pattern && s >= kCertainMatch) || (s >= 0.5 && p >= kGoodMaterialProbability) ? "good"
+  EXPECT_EQ(j["verdict"], (pattern && s >= kCertainMatch) || (s >= 0.5 && p >= kGoodProbability) ? "good"
                          : s >= 0.25                                             ? "approximate"
                                                                                  : "no-match");
   EXPECT_GT(j["timings"]["total"].get<double>(), 0.0);
