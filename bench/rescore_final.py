@@ -47,15 +47,16 @@ def candidates(m):
         if not s.get("finalist"):
             continue
         if "refined_similarity" in s:
-            out.append((s["shader"], s["refined_similarity"], s["selection_probability"]))
+            out.append((s["shader"], s["refined_similarity"], s["selection_probability"], s.get("shape_distance", 0.0)))
         if "polished_similarity" in s:
-            out.append((s["shader"], s["polished_similarity"], s["selection_probability"]))
+            out.append((s["shader"], s["polished_similarity"], s["selection_probability"], 0.0))
     return out
 
 
-def choose(cands, lam, bias, ratio=2.25):
+def choose(cands, lam, bias, ratio=2.25, gamma=0.0):
     def score(c):
-        return math.log(max(c[1], 1e-9)) - bias.get(c[0], 0.0) + lam * math.log(max(c[2], 1e-9))
+        return (math.log(max(c[1], 1e-9)) - bias.get(c[0], 0.0) + lam * math.log(max(c[2], 1e-9))
+                - gamma * c[3])
     best = max(cands, key=score)
     most = max(cands, key=lambda c: c[1])
     if best[1] * ratio < most[1]:
@@ -168,6 +169,22 @@ def calibrate(fit, rep, target_precision=0.95, use=None, C=1.0):
                   f" (wrong-but-good {(good & ~yr).sum()} of {(~yr).sum()} wrong)")
 
 
+def shape_weights(rows, title, gammas=(0, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0)):
+    """Category accuracy of the final choice log S + log P - gamma x shape distance (the finalists'
+    `shape_distance`, recorded since session 12)."""
+    rows = [r for r in rows if any("shape_distance" in s for s in r["match"]["starts"])]
+    out = []
+    for g in gammas:
+        right = 0
+        for r in rows:
+            c = candidates(r["match"])
+            sh = r["match"]["spec"]["shader"] if not c or r["match"].get("pattern") else choose(c, 1.0, {}, gamma=g)
+            right += sh in r["accepted"]
+        out.append((g, right))
+    print(f"{title} ({len(rows)} photos with shape distances): " + ", ".join(f"gamma {g:g}: {n}" for g, n in out))
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--labels", required=True)
@@ -175,6 +192,7 @@ def main():
     ap.add_argument("--apply", help="batch out-dir of the report photos")
     ap.add_argument("--features", default="", help="comma-separated subset of " + ",".join(FEATURES))
     ap.add_argument("--C", type=float, default=1.0, help="inverse L2 strength of the logistic fit")
+    ap.add_argument("--shape", action="store_true", help="only the shape distance's weight in the final choice")
     ap.add_argument("--calibrate-only", action="store_true", help="skip the final-choice alternatives")
     a = ap.parse_args()
     labels = {i["id"]: i["accepted"] for i in json.load(open(a.labels))["images"]}
@@ -185,6 +203,11 @@ def main():
     print(f"replay agrees with the matcher on {replay_ok} of {sum(1 for r in fit if candidates(r['match']) and not r['match'].get('pattern'))}")
     actual = sum(r["match"]["spec"]["shader"] in r["accepted"] for r in fit)
     print(f"matcher as run: {actual}/{len(fit)}")
+    if a.shape:
+        shape_weights(fit, "fit")
+        if a.apply:
+            shape_weights(load_runs(a.apply, labels), "apply")
+        return
     if not a.calibrate_only:
         top = []
         for lam in (0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0):

@@ -670,7 +670,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     double image_rmse = -1;  // deterministic polish, or a seed-independent point on a clean pattern:
                              // registered RGB RMSE (metrics/aligned.h)
     bool seed_independent = false;  // measured on clean patterns only
+    double shape_distance = 0;      // to the target (selection.h); 0 for polished points
   };
+  const std::vector<double> target_shape = shape_statistics(target, o.resolution);
   // On a clean pattern, a seed-independent finalist's registered RMS: what decides whether its
   // S >= kCertainMatch may still call it "good" (kVisiblyOtherRmse).
   const auto measure_exactness = [&](Candidate& c, const Image& render) {
@@ -689,7 +691,10 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     const double s = metric.similarity(target_full, f);
     ++evaluations;
     result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
+    const double shape = shape_distance(target_shape, shape_statistics(img, o.resolution));
+    result.starts[i]["shape_distance"] = shape;
     final_candidates.push_back({&rf, rf.packed, s, std::move(f), nlohmann::json::object()});
+    final_candidates.back().shape_distance = shape;
     measure_exactness(final_candidates.back(), img);
     if (final_candidates.back().image_rmse >= 0) result.starts[i]["image_rmse"] = final_candidates.back().image_rmse;
   }
@@ -998,7 +1003,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     return pixel_exact(c) ? 2e6 - c.image_rmse
            : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
-               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0);
+               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
+                     (pattern ? 0.0 : o.shape_weight * c.shape_distance);
   };
   const Candidate* final_choice = nullptr;
   const Candidate* most_similar = nullptr;

@@ -72,6 +72,8 @@ inline constexpr double kOutclassedRatio = 2.25;
 // The final choice among the finalists maximises log S + kSelectionWeight * log P(shader): the
 // similarity as a likelihood and the selection as the prior, with equal say.
 inline constexpr double kSelectionWeight = 1.0;
+// The shape distance's weight in the final choice (MatchOptions::shape_weight; 0: not used).
+inline constexpr double kShapeWeight = 0.0;
 
 // "good", "approximate" or "no-match". `pattern`: the target is a clean pattern (see MatchResult).
 std::string verdict_for(double similarity, double probability, bool pattern);
@@ -102,6 +104,10 @@ struct MatchOptions {
   // was trained on (bench_match_eval --selection-override), so that the match sees what it would
   // see of a new photo. Empty: the model decides (always, in the product).
   std::map<std::string, double> selection_override;
+  // Weight of the shape distance (selection.h: shape_distance of a finalist's render to the target,
+  // a statistic the refinement does not optimise) in the final choice on photos:
+  // log S + log P - shape_weight x distance. Recorded per finalist whatever the weight.
+  double shape_weight = kShapeWeight;
 };
 
 struct Candidate {

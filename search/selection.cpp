@@ -86,6 +86,21 @@ std::vector<double> colour_statistics(const Image& photo) {
   return out;
 }
 
+double shape_distance(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != kShapeStatistics || b.size() != kShapeStatistics)
+    throw Error("shape statistics of different lengths", "an internal error: report it");
+  // The model's last kShapeStatistics features are the shape statistics (v6 and later); without
+  // them the raw values count alike.
+  const size_t first = model::kFeatures - model::kShapeFeatures;
+  double sum = 0;
+  for (size_t i = 0; i < kShapeStatistics; ++i) {
+    const double scale = model::kShapeFeatures > 0 ? double(model::kScale[first + i]) : 1.0;
+    const double d = (a[i] - b[i]) / scale;
+    sum += d * d;
+  }
+  return std::sqrt(sum / double(kShapeStatistics));
+}
+
 int selection_version() { return model::kVersion; }
 
 SelectionTarget::SelectionTarget(const Image& photo, const metrics::Metric& metric) {

@@ -61,6 +61,10 @@ inline constexpr int kShapeLevels = 4;
 inline constexpr std::size_t kShapeStatisticsPerLevel = 9;
 inline constexpr std::size_t kShapeStatistics = kShapeLevels * kShapeStatisticsPerLevel;
 std::vector<double> shape_statistics(const Image& view, int resolution = 256);
+// How differently two images are shaped: the RMS difference of their shape statistics, each in
+// units of its spread over the selection model's training rows (its standardisation). Not
+// optimised by the refinement, so a look-alike that games the similarity is not tuned to it.
+double shape_distance(const std::vector<double>& a, const std::vector<double>& b);
 
 // The selection model's version (recorded in match results).
 int selection_version();
