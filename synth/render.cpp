@@ -447,8 +447,9 @@ RenderStats render(Synthesizer& synth, const Exemplar& ex, const Window& win, co
       // R pixels more on every side (exact by spatial determinism; a tileable plane wraps by itself).
       const Window strip{win.x - R, win.y + y0 - R, win.width + 2 * R, rows + 2 * R};
       P = synth.synthesise(strip, options);
-      S.resize(2 * n);
-      for (int y = 0; y < rows; ++y)
+      // The blend reads P; the strip's own coordinates are needed only for --coords.
+      if (coords) S.resize(2 * n);
+      for (int y = 0; coords && y < rows; ++y)
         std::memcpy(&S[2 * static_cast<size_t>(y) * win.width], &P[2 * ((y + R) * static_cast<size_t>(strip.width) + R)],
                     2 * sizeof(int32_t) * win.width);
     } else {

@@ -736,14 +736,16 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   // Read back the window's rows.
   std::vector<int32_t> out(static_cast<size_t>(win.width) * win.height * 2);
   const Region& r = region[L];
-  // One read of the window's rows (full padded width), then the columns are cut on the host: a
-  // read per row cost ~8 us each.
-  std::vector<cl_int2> rows(static_cast<size_t>(win.height) * r.w);
-  ocl::download_async(parent, static_cast<size_t>(pad) * r.w, rows.size(), rows.data());
-  ocl::finish();
-  for (int y = 0; y < win.height; ++y)
-    std::memcpy(reinterpret_cast<cl_int2*>(out.data()) + static_cast<size_t>(y) * win.width,
-                rows.data() + static_cast<size_t>(y) * r.w + pad, sizeof(cl_int2) * win.width);
+  // One rectangular read of the window (a read per row cost ~8 us each; reading the padded rows
+  // and cutting the columns on the host touched 2 MB more for a 512^2 window).
+  ocl::with_cl_errors("reading a device buffer", [&] {
+    const cl::array<cl::size_type, 3> origin{sizeof(cl_int2) * pad, static_cast<cl::size_type>(pad), 0};
+    const cl::array<cl::size_type, 3> host{0, 0, 0};
+    const cl::array<cl::size_type, 3> size{sizeof(cl_int2) * win.width, static_cast<cl::size_type>(win.height), 1};
+    return ocl::Runtime::instance().queue().enqueueReadBufferRect(parent, CL_TRUE, origin, host, size,
+                                                                  sizeof(cl_int2) * r.w, 0, sizeof(cl_int2) * win.width,
+                                                                  0, out.data());
+  });
   timing::mark("readback");
   return out;
 }
