@@ -293,14 +293,16 @@ int sy_candidate(int2* cand, int n, int2 u, int ew, int eh, int toroidal) {
 }
 #define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
 kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
-                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
+                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode, \
+                       int xe, int ye) { \
   /*  One work-item per pixel of this sub-pass's colour (S already holds a copy of Sin). The window's */ \
   /*  outermost ring is never re-matched (its 3x3 would be clamped): it lies in the padding, which the */ \
   /*  re-match's reach (3 px per sub-pass) never carries into the window. */ \
   const int j = get_global_id(1); \
   if (j >= h) return; \
   const int i = (int)((parity - ((ox + oy + j) & 1)) & 1) + 2 * (int)get_global_id(0); \
-  if (i >= w - 1 || i == 0 || j == 0 || j == h - 1) return; \
+  /*  [xe, ye): the end of the rectangle this sub-pass must cover (it starts at the launch's offset). */ \
+  if (i >= min(w - 1, xe) || i == 0 || j == 0 || j >= min(h - 1, ye)) return; \
   const long p = (long)j * w + i; \
   const int2 s0 = Sin[p]; \
   /*  The 3x3 around p (no clamping: p is not on the ring), row by row. */ \
@@ -719,11 +721,29 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           ocl::with_cl_errors("copying a synthesis level", [&] {
             return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, other, 0, 0, count * sizeof(cl_int2));
           });
-          launch2d(match, (r.w + 1) / 2, r.h, S, other, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1), dev.texels,
-                   lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1),
-                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-                   static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
+          // Only the pixels the window still depends on: each later sub-pass reads 3 px around, so
+          // sub-pass `sub` covers the window widened by 3 px per sub-pass left (the rest of the
+          // padding keeps its copied values; the window's bytes do not change).
+          const int m = pad - 3 * (2 * rematch - 1 - sub);
+          const int x0 = std::max(m, 1), y0 = std::max(m, 1);
+          const int xe = r.w - m, ye = r.h - m;
+          const int gx0 = std::max(x0 / 2 - 1, 0), gx = (xe + 1) / 2 + 1 - gx0, gy = ye - y0;
+          ocl::with_cl_errors("launching a synthesis kernel", [&] {
+            cl_uint index = 0;
+            match.setArg(index++, S), match.setArg(index++, other), match.setArg(index++, static_cast<cl_int>(r.w));
+            match.setArg(index++, static_cast<cl_int>(r.h)), match.setArg(index++, static_cast<cl_long>(r.x));
+            match.setArg(index++, static_cast<cl_long>(r.y)), match.setArg(index++, static_cast<cl_int>(sub & 1));
+            match.setArg(index++, dev.texels), match.setArg(index++, lv.coherent), match.setArg(index++, lv.coherent2);
+            match.setArg(index++, static_cast<cl_int>(a.candidates - 1)), match.setArg(index++, static_cast<cl_int>(a.width));
+            match.setArg(index++, static_cast<cl_int>(a.height)), match.setArg(index++, static_cast<cl_int>(a.toroidal ? 1 : 0));
+            match.setArg(index++, static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
+            match.setArg(index++, static_cast<cl_int>(xe)), match.setArg(index++, static_cast<cl_int>(ye));
+            using detail::kLocalX, detail::kLocalY;
+            const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+            ocl::Runtime::instance().queue().enqueueNDRangeKernel(match, cl::NDRange(gx0, y0), cl::NDRange(rx, ry),
+                                                                  cl::NDRange(kLocalX, kLocalY));
+            return 0;
+          });
           std::swap(S, other);
         }
       }
