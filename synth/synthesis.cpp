@@ -184,10 +184,11 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
 }
 kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
                        global const char* A, global const short* NE, global const int2* C1,
-                       constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
+                       constant int* P, int spacing, int ew, int eh, int toroidal, int kappa, int xe, int ye) {
+  /*  [xe, ye): the end of the rectangle this sub-pass must cover (it starts at the launch's offset). */
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
-  if (i >= w || j >= h) return;
+  if (i >= min(w, xe) || j >= min(h, ye)) return;
   sy_correct_px(S, i, j, w, h, A, NE, C1, P, spacing, ew, eh, toroidal, kappa);
 }
 // Sub-passes of the refinement and the re-match: the two colours of the checkerboard of the ABSOLUTE
@@ -678,12 +679,32 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     for (int pass = 0; pass < level_passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
-        launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
-                    static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
-                    static_cast<cl_int>(parx), static_cast<cl_int>(pary), lv.appearance, lv.neighbourhood,
-                    lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
-                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-                    static_cast<cl_int>(std::lround(o.kappa * 256)));
+        // Only the pixels the level still depends on: after its K = 4 passes sub-passes the level is
+        // needed inset by K + 2 (the parents of the finer level's region, or at the finest level the
+        // window and the re-match's reach); a sub-pass reads 1 px around, so sub-pass k needs the
+        // rectangle inset by 3 + k (no pixel in it reads a clamped neighbour; the bytes do not change).
+        const int m = std::min(3 + 4 * pass + sub, 4 * level_passes + 2);
+        const int xe = r.w - m, ye = r.h - m;
+        const int gx0 = std::max(m / 2 - 1, 0), gy0 = std::max(m / 2 - 1, 0);
+        const int gx = std::max((xe + 1) / 2 + 1 - gx0, 1), gy = std::max((ye + 1) / 2 + 1 - gy0, 1);
+        ocl::with_cl_errors("launching a synthesis kernel", [&] {
+          cl_uint index = 0;
+          cl::Kernel& k = dev.correct;
+          k.setArg(index++, S), k.setArg(index++, static_cast<cl_int>(r.w)), k.setArg(index++, static_cast<cl_int>(r.h));
+          k.setArg(index++, static_cast<cl_long>(r.x)), k.setArg(index++, static_cast<cl_long>(r.y));
+          k.setArg(index++, static_cast<cl_int>(parx)), k.setArg(index++, static_cast<cl_int>(pary));
+          k.setArg(index++, lv.appearance), k.setArg(index++, lv.neighbourhood), k.setArg(index++, lv.coherent);
+          k.setArg(index++, lv.projection), k.setArg(index++, static_cast<cl_int>(spacing));
+          k.setArg(index++, static_cast<cl_int>(a.width)), k.setArg(index++, static_cast<cl_int>(a.height));
+          k.setArg(index++, static_cast<cl_int>(a.toroidal ? 1 : 0));
+          k.setArg(index++, static_cast<cl_int>(std::lround(o.kappa * 256)));
+          k.setArg(index++, static_cast<cl_int>(xe)), k.setArg(index++, static_cast<cl_int>(ye));
+          using detail::kLocalX, detail::kLocalY;
+          const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+          ocl::Runtime::instance().queue().enqueueNDRangeKernel(k, cl::NDRange(gx0, gy0), cl::NDRange(rx, ry),
+                                                                cl::NDRange(kLocalX, kLocalY));
+          return 0;
+        });
       }
     }
     if (passes_at(a, o, l) > 0) phase("correction");
