@@ -184,10 +184,11 @@ void sy_correct_px(global int2* S, int i, int j, int w, int h,
 }
 kernel void sy_correct(global int2* S, int w, int h, long ox, long oy, int parx, int pary,
                        global const char* A, global const short* NE, global const int2* C1,
-                       constant int* P, int spacing, int ew, int eh, int toroidal, int kappa) {
+                       constant int* P, int spacing, int ew, int eh, int toroidal, int kappa, int xe, int ye) {
+  /*  [xe, ye): the end of the rectangle this sub-pass must cover (it starts at the launch's offset). */
   const int i = (int)((parx - (ox & 1)) & 1) + 2 * get_global_id(0);
   const int j = (int)((pary - (oy & 1)) & 1) + 2 * get_global_id(1);
-  if (i >= w || j >= h) return;
+  if (i >= min(w, xe) || j >= min(h, ye)) return;
   sy_correct_px(S, i, j, w, h, A, NE, C1, P, spacing, ew, eh, toroidal, kappa);
 }
 // Sub-passes of the refinement and the re-match: the two colours of the checkerboard of the ABSOLUTE
@@ -293,14 +294,16 @@ int sy_candidate(int2* cand, int n, int2 u, int ew, int eh, int toroidal) {
 }
 #define SY_REMATCH(NAME, VT, IT, CONVERT, HSUM, ROWDIST) \
 kernel void NAME(global const int2* Sin, global int2* S, int w, int h, long ox, long oy, int parity, \
-                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode) { \
+                       global const VT* T, global const int2* C1, global const int2* C2, int kc, int ew, int eh, int toroidal, int kmode, \
+                       int xe, int ye) { \
   /*  One work-item per pixel of this sub-pass's colour (S already holds a copy of Sin). The window's */ \
   /*  outermost ring is never re-matched (its 3x3 would be clamped): it lies in the padding, which the */ \
   /*  re-match's reach (3 px per sub-pass) never carries into the window. */ \
   const int j = get_global_id(1); \
   if (j >= h) return; \
   const int i = (int)((parity - ((ox + oy + j) & 1)) & 1) + 2 * (int)get_global_id(0); \
-  if (i >= w - 1 || i == 0 || j == 0 || j == h - 1) return; \
+  /*  [xe, ye): the end of the rectangle this sub-pass must cover (it starts at the launch's offset). */ \
+  if (i >= min(w - 1, xe) || i == 0 || j == 0 || j >= min(h - 1, ye)) return; \
   const long p = (long)j * w + i; \
   const int2 s0 = Sin[p]; \
   /*  The 3x3 around p (no clamping: p is not on the ring), row by row. */ \
@@ -676,12 +679,32 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
     for (int pass = 0; pass < level_passes; ++pass) {
       for (int sub = 0; sub < 4; ++sub) {
         const int parx = sub & 1, pary = sub >> 1;
-        launch2d(dev.correct, (r.w + 1) / 2, (r.h + 1) / 2, S, static_cast<cl_int>(r.w),
-                    static_cast<cl_int>(r.h), static_cast<cl_long>(r.x), static_cast<cl_long>(r.y),
-                    static_cast<cl_int>(parx), static_cast<cl_int>(pary), lv.appearance, lv.neighbourhood,
-                    lv.coherent, lv.projection, static_cast<cl_int>(spacing), static_cast<cl_int>(a.width),
-                    static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-                    static_cast<cl_int>(std::lround(o.kappa * 256)));
+        // Only the pixels the level still depends on: after its K = 4 passes sub-passes the level is
+        // needed inset by K + 2 (the parents of the finer level's region, or at the finest level the
+        // window and the re-match's reach); a sub-pass reads 1 px around, so sub-pass k needs the
+        // rectangle inset by 3 + k (no pixel in it reads a clamped neighbour; the bytes do not change).
+        const int m = std::min(3 + 4 * pass + sub, 4 * level_passes + 2);
+        const int xe = r.w - m, ye = r.h - m;
+        const int gx0 = std::max(m / 2 - 1, 0), gy0 = std::max(m / 2 - 1, 0);
+        const int gx = std::max((xe + 1) / 2 + 1 - gx0, 1), gy = std::max((ye + 1) / 2 + 1 - gy0, 1);
+        ocl::with_cl_errors("launching a synthesis kernel", [&] {
+          cl_uint index = 0;
+          cl::Kernel& k = dev.correct;
+          k.setArg(index++, S), k.setArg(index++, static_cast<cl_int>(r.w)), k.setArg(index++, static_cast<cl_int>(r.h));
+          k.setArg(index++, static_cast<cl_long>(r.x)), k.setArg(index++, static_cast<cl_long>(r.y));
+          k.setArg(index++, static_cast<cl_int>(parx)), k.setArg(index++, static_cast<cl_int>(pary));
+          k.setArg(index++, lv.appearance), k.setArg(index++, lv.neighbourhood), k.setArg(index++, lv.coherent);
+          k.setArg(index++, lv.projection), k.setArg(index++, static_cast<cl_int>(spacing));
+          k.setArg(index++, static_cast<cl_int>(a.width)), k.setArg(index++, static_cast<cl_int>(a.height));
+          k.setArg(index++, static_cast<cl_int>(a.toroidal ? 1 : 0));
+          k.setArg(index++, static_cast<cl_int>(std::lround(o.kappa * 256)));
+          k.setArg(index++, static_cast<cl_int>(xe)), k.setArg(index++, static_cast<cl_int>(ye));
+          using detail::kLocalX, detail::kLocalY;
+          const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+          ocl::Runtime::instance().queue().enqueueNDRangeKernel(k, cl::NDRange(gx0, gy0), cl::NDRange(rx, ry),
+                                                                cl::NDRange(kLocalX, kLocalY));
+          return 0;
+        });
       }
     }
     if (passes_at(a, o, l) > 0) phase("correction");
@@ -719,11 +742,29 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           ocl::with_cl_errors("copying a synthesis level", [&] {
             return ocl::Runtime::instance().queue().enqueueCopyBuffer(S, other, 0, 0, count * sizeof(cl_int2));
           });
-          launch2d(match, (r.w + 1) / 2, r.h, S, other, static_cast<cl_int>(r.w), static_cast<cl_int>(r.h),
-                   static_cast<cl_long>(r.x), static_cast<cl_long>(r.y), static_cast<cl_int>(sub & 1), dev.texels,
-                   lv.coherent, lv.coherent2, static_cast<cl_int>(a.candidates - 1),
-                   static_cast<cl_int>(a.width), static_cast<cl_int>(a.height), static_cast<cl_int>(a.toroidal ? 1 : 0),
-                   static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
+          // Only the pixels the window still depends on: each later sub-pass reads 3 px around, so
+          // sub-pass `sub` covers the window widened by 3 px per sub-pass left (the rest of the
+          // padding keeps its copied values; the window's bytes do not change).
+          const int m = pad - 3 * (2 * rematch - 1 - sub);
+          const int x0 = std::max(m, 1), y0 = std::max(m, 1);
+          const int xe = r.w - m, ye = r.h - m;
+          const int gx0 = std::max(x0 / 2 - 1, 0), gx = (xe + 1) / 2 + 1 - gx0, gy = ye - y0;
+          ocl::with_cl_errors("launching a synthesis kernel", [&] {
+            cl_uint index = 0;
+            match.setArg(index++, S), match.setArg(index++, other), match.setArg(index++, static_cast<cl_int>(r.w));
+            match.setArg(index++, static_cast<cl_int>(r.h)), match.setArg(index++, static_cast<cl_long>(r.x));
+            match.setArg(index++, static_cast<cl_long>(r.y)), match.setArg(index++, static_cast<cl_int>(sub & 1));
+            match.setArg(index++, dev.texels), match.setArg(index++, lv.coherent), match.setArg(index++, lv.coherent2);
+            match.setArg(index++, static_cast<cl_int>(a.candidates - 1)), match.setArg(index++, static_cast<cl_int>(a.width));
+            match.setArg(index++, static_cast<cl_int>(a.height)), match.setArg(index++, static_cast<cl_int>(a.toroidal ? 1 : 0));
+            match.setArg(index++, static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
+            match.setArg(index++, static_cast<cl_int>(xe)), match.setArg(index++, static_cast<cl_int>(ye));
+            using detail::kLocalX, detail::kLocalY;
+            const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+            ocl::Runtime::instance().queue().enqueueNDRangeKernel(match, cl::NDRange(gx0, y0), cl::NDRange(rx, ry),
+                                                                  cl::NDRange(kLocalX, kLocalY));
+            return 0;
+          });
           std::swap(S, other);
         }
       }
@@ -736,14 +777,16 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
   // Read back the window's rows.
   std::vector<int32_t> out(static_cast<size_t>(win.width) * win.height * 2);
   const Region& r = region[L];
-  // One read of the window's rows (full padded width), then the columns are cut on the host: a
-  // read per row cost ~8 us each.
-  std::vector<cl_int2> rows(static_cast<size_t>(win.height) * r.w);
-  ocl::download_async(parent, static_cast<size_t>(pad) * r.w, rows.size(), rows.data());
-  ocl::finish();
-  for (int y = 0; y < win.height; ++y)
-    std::memcpy(reinterpret_cast<cl_int2*>(out.data()) + static_cast<size_t>(y) * win.width,
-                rows.data() + static_cast<size_t>(y) * r.w + pad, sizeof(cl_int2) * win.width);
+  // One rectangular read of the window (a read per row cost ~8 us each; reading the padded rows
+  // and cutting the columns on the host touched 2 MB more for a 512^2 window).
+  ocl::with_cl_errors("reading a device buffer", [&] {
+    const cl::array<cl::size_type, 3> origin{sizeof(cl_int2) * pad, static_cast<cl::size_type>(pad), 0};
+    const cl::array<cl::size_type, 3> host{0, 0, 0};
+    const cl::array<cl::size_type, 3> size{sizeof(cl_int2) * win.width, static_cast<cl::size_type>(win.height), 1};
+    return ocl::Runtime::instance().queue().enqueueReadBufferRect(parent, CL_TRUE, origin, host, size,
+                                                                  sizeof(cl_int2) * r.w, 0, sizeof(cl_int2) * win.width,
+                                                                  0, out.data());
+  });
   timing::mark("readback");
   return out;
 }
