@@ -437,6 +437,15 @@ void launch2d(cl::Kernel& kernel, int gx, int gy, const Args&... args) {
   detail::launch2d("launching a synthesis kernel", kernel, gx, gy, args...);
 }
 
+// Enqueues `kernel` (arguments set) over gx x gy work-items from (gx0, gy0), the range rounded up
+// to whole work-groups: the kernels test their own end (xe, ye).
+void enqueue_from(cl::Kernel& kernel, int gx0, int gy0, int gx, int gy) {
+  using detail::kLocalX, detail::kLocalY;
+  const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
+  ocl::Runtime::instance().queue().enqueueNDRangeKernel(kernel, cl::NDRange(gx0, gy0), cl::NDRange(rx, ry),
+                                                        cl::NDRange(kLocalX, kLocalY));
+}
+
 }  // namespace
 
 struct Synthesizer::DeviceLevel {
@@ -699,10 +708,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
           k.setArg(index++, static_cast<cl_int>(a.toroidal ? 1 : 0));
           k.setArg(index++, static_cast<cl_int>(std::lround(o.kappa * 256)));
           k.setArg(index++, static_cast<cl_int>(xe)), k.setArg(index++, static_cast<cl_int>(ye));
-          using detail::kLocalX, detail::kLocalY;
-          const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
-          ocl::Runtime::instance().queue().enqueueNDRangeKernel(k, cl::NDRange(gx0, gy0), cl::NDRange(rx, ry),
-                                                                cl::NDRange(kLocalX, kLocalY));
+          enqueue_from(k, gx0, gy0, gx, gy);
           return 0;
         });
       }
@@ -759,10 +765,7 @@ std::vector<int32_t> Synthesizer::synthesise(const Window& win, const SynthOptio
             match.setArg(index++, static_cast<cl_int>(a.height)), match.setArg(index++, static_cast<cl_int>(a.toroidal ? 1 : 0));
             match.setArg(index++, static_cast<cl_int>(sub / 2 < o.rematch_candidate_passes ? kRematchCoherence : 0));
             match.setArg(index++, static_cast<cl_int>(xe)), match.setArg(index++, static_cast<cl_int>(ye));
-            using detail::kLocalX, detail::kLocalY;
-            const int rx = (gx + kLocalX - 1) / kLocalX * kLocalX, ry = (gy + kLocalY - 1) / kLocalY * kLocalY;
-            ocl::Runtime::instance().queue().enqueueNDRangeKernel(match, cl::NDRange(gx0, y0), cl::NDRange(rx, ry),
-                                                                  cl::NDRange(kLocalX, kLocalY));
+            enqueue_from(match, gx0, y0, gx, gy);
             return 0;
           });
           std::swap(S, other);

@@ -50,6 +50,13 @@ double worst_unit_error(const std::vector<double>& a, const std::vector<double>&
   return worst;
 }
 
+// The target: the point rendered at side `size` with seed 7.
+Image render_at(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, int size) {
+  RenderSettings rs;
+  rs.width = rs.height = size;
+  return renderer.render_batch(decl, {packed}, {7u}, rs).front();
+}
+
 // Target 8 of the 18 deterministic benchmark targets: a soft yellow superellipse, rotated, wider
 // than the image on its diagonal.
 const char* kTarget = "superellipse:width=0.9254,height=0.672,exponent=8.057,rotation=42.353,softness=0.312,"
@@ -66,9 +73,7 @@ TEST(AlignRescue, FindsASuperellipseFromItsComplementAlias) {
   Renderer renderer;
   const ShaderDecl& decl = ShaderLibrary::builtin().get("superellipse");
   const auto truth = packed_of(decl, kTarget);
-  RenderSettings rs;
-  rs.width = rs.height = kResolution;
-  const Image target = renderer.render_batch(decl, {truth}, {7u}, rs).front();
+  const Image target = render_at(renderer, decl, truth, kResolution);
   const auto alias = packed_of(decl, "superellipse:width=0.6478,height=0.9042,exponent=12.83,rotation=42.98,"
                                      "softness=0.3466,fg=(0.86,0.83,0.1),bg=(0.66,0.23,0.42)");
   const ParameterSpace space(decl, alias, colours_of(decl));
@@ -92,9 +97,7 @@ TEST(AlignRescue, ANearPointIsNotRescanned) {
   Renderer renderer;
   const ShaderDecl& decl = ShaderLibrary::builtin().get("superellipse");
   const auto truth = packed_of(decl, kTarget);
-  RenderSettings rs;
-  rs.width = rs.height = kSmall;
-  const Image target = renderer.render_batch(decl, {truth}, {7u}, rs).front();
+  const Image target = render_at(renderer, decl, truth, kSmall);
   auto near = truth;
   near[decl.find("width")->offset] = 0.88f;
   near[decl.find("softness")->offset] = 0.33f;
