@@ -3,7 +3,12 @@
 //
 //   bench_synth --exemplars DIR [--size 512] [--proctex build/cli/proctex] [--gmic gmic]
 //               [--markdown out.md] [--sheet docs/synth-bench.png] [--work DIR] [--big 4096]
-//               [--reuse-gmic] [--proctex-args "--passes 3 ..."]
+//               [--reuse-gmic] [--proctex-args "--passes 3 ..."] [--seeds N] [--runs N]
+//
+// --seeds N (default 1) also runs both with seeds 2..N (proctex --seed s, gmic -srand s) and adds a
+// table of the patch measures averaged over the seeds: one run of each is a sample of a random
+// process (G'MIC's grass coherence was 4.99-5.10 over four runs with the same -srand 1).
+// --runs N (default 5): timed runs of the proctex command per exemplar (median reported).
 //
 // --reuse-gmic keeps G'MIC outputs already in the work folder (quality only; its time is then not
 // measured, shown as 0, and no speed-up is computed): for iterating on proctex's options.
@@ -220,7 +225,7 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   fs::path exemplar_dir, work = "build/bench-synth", markdown, sheet;
   std::string proctex_bin = "build/cli/proctex", gmic = "gmic";
-  int size = 512, big = 4096;
+  int size = 512, big = 4096, seeds = 1, runs = 5;
   bool reuse_gmic = false;
   std::vector<std::string> extra_args;
   for (int i = 1; i < argc; ++i) {
@@ -235,13 +240,15 @@ int main(int argc, char** argv) {
     else if (a == "--size") size = std::stoi(next());
     else if (a == "--big") big = std::stoi(next());
     else if (a == "--reuse-gmic") reuse_gmic = true;
+    else if (a == "--seeds") seeds = std::max(1, std::stoi(next()));
+    else if (a == "--runs") runs = std::max(1, std::stoi(next()));
     else if (a == "--proctex-args") {
       std::istringstream words(next());
       for (std::string w; words >> w;) extra_args.push_back(w);
     }
     else {
       std::fprintf(stderr, "usage: bench_synth --exemplars DIR [--size 512] [--big 4096] [--gmic gmic] "
-                           "[--proctex build/cli/proctex] [--markdown out.md] [--sheet out.png] [--work DIR]\n");
+                           "[--proctex build/cli/proctex] [--markdown out.md] [--sheet out.png] [--work DIR] [--seeds N] [--runs N]\n");
       return 2;
     }
   }
@@ -251,6 +258,10 @@ int main(int argc, char** argv) {
   }
   try {
     fs::create_directories(work);
+    // G'MIC's OpenMP threads spin-wait by default: on a machine with any other load that spin is
+    // counted as CPU and wall (brick: 16.5 s CPU against 0.86 s passive in the same minute, load
+    // ~2.7). Passive waiting measures its work, not the contention (proctex does not use OpenMP).
+    setenv("OMP_WAIT_POLICY", "passive", 0);
     const fs::path cache = work / "cache";
     setenv("PROCTEX_CACHE_DIR", cache.c_str(), 1);
     std::vector<fs::path> files;
@@ -259,10 +270,10 @@ int main(int argc, char** argv) {
     std::sort(files.begin(), files.end());
     std::string table =
         "| exemplar | proctex CLI wall / CPU (s) | proctex synthesis in-process wall / CPU (s) | G'MIC wall / CPU (s) "
-        "| speed-up (CPU, CLI) | coherence proctex / G'MIC | completeness proctex / G'MIC | similarity proctex / G'MIC "
+        "| speed-up (CPU, CLI) | speed-up (wall, CLI) | coherence proctex / G'MIC | completeness proctex / G'MIC | similarity proctex / G'MIC "
         "| verbatim share proctex / G'MIC | largest copied piece proctex / G'MIC |\n"
-        "|---|---|---|---|---|---|---|---|---|---|\n";
-    std::vector<double> coh_p, coh_g, com_p, com_g, sim_p, sim_g, speed_cli, speed_lib, cop_p, cop_g, pie_p, pie_g;
+        "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    std::vector<double> coh_p, coh_g, com_p, com_g, sim_p, sim_g, speed_cli, speed_wall, speed_lib, cop_p, cop_g, pie_p, pie_g;
     std::vector<Image> tiles;
     std::vector<std::string> labels;
     for (const auto& file : files) {
@@ -277,7 +288,7 @@ int main(int argc, char** argv) {
       cmd.insert(cmd.end(), extra_args.begin(), extra_args.end());
       run_process(cmd);
       std::vector<double> cli_wall, cli_cpu;
-      for (int r = 0; r < 1; ++r) {
+      for (int r = 0; r < runs; ++r) {
         const auto t = run_process(cmd);
         if (t.exit_code != 0) throw Error("proctex synth failed on " + file.string());
         cli_wall.push_back(t.wall), cli_cpu.push_back(t.cpu);
@@ -323,11 +334,12 @@ int main(int argc, char** argv) {
       sim_p.push_back(qp.similarity), sim_g.push_back(qg.similarity);
       cop_p.push_back(qp.copied), cop_g.push_back(qg.copied), pie_p.push_back(qp.piece), pie_g.push_back(qg.piece);
       speed_cli.push_back(median(g_cpu) / median(cli_cpu));
+      speed_wall.push_back(median(g_wall) / median(cli_wall));
       speed_lib.push_back(median(g_cpu) / median(lib_cpu));
-      table += fmt::format("| {} | {:.2f} / {:.2f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.1f}x | {:.2f} / {:.2f} | "
+      table += fmt::format("| {} | {:.3f} / {:.3f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.1f}x | {:.1f}x | {:.2f} / {:.2f} | "
                            "{:.2f} / {:.2f} | {:.3f} / {:.3f} | {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
                            name, median(cli_wall), median(cli_cpu), median(lib_wall), median(lib_cpu), median(g_wall),
-                           median(g_cpu), median(g_cpu) / median(cli_cpu), qp.coherence, qg.coherence,
+                           median(g_cpu), median(g_cpu) / median(cli_cpu), median(g_wall) / median(cli_wall), qp.coherence, qg.coherence,
                            qp.completeness, qg.completeness, qp.similarity, qg.similarity, qp.copied, qg.copied,
                            qp.piece, qg.piece);
       std::fprintf(stderr, "%s", table.substr(table.rfind("| " + name)).c_str());
@@ -341,10 +353,60 @@ int main(int argc, char** argv) {
       labels.push_back("G'MIC");
     }
     table += fmt::format(
-        "| **median** | | | | CLI {:.1f}x, in-process {:.1f}x | {:.2f} / {:.2f} | {:.2f} / {:.2f} | {:.3f} / {:.3f} "
+        "| **median** | | | | CLI {:.1f}x, in-process {:.1f}x | CLI {:.1f}x | {:.2f} / {:.2f} | {:.2f} / {:.2f} | {:.3f} / {:.3f} "
         "| {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
-        median(speed_cli), median(speed_lib), median(coh_p), median(coh_g), median(com_p), median(com_g),
+        median(speed_cli), median(speed_lib), median(speed_wall), median(coh_p), median(coh_g), median(com_p), median(com_g),
         median(sim_p), median(sim_g), median(cop_p), median(cop_g), median(pie_p), median(pie_g));
+
+    // Seeds 2..N of both: one output per seed is one sample of a random process, so the verdict on
+    // the patch measures rests on their average over the seeds.
+    std::string seed_table;
+    if (seeds > 1) {
+      seed_table = fmt::format(
+          "\nPatch measures averaged over seeds 1-{} (proctex `--seed s`, G'MIC `-srand s`):\n\n"
+          "| exemplar | coherence proctex / G'MIC | completeness proctex / G'MIC | largest copied piece proctex / G'MIC "
+          "|\n|---|---|---|---|\n",
+          seeds);
+      std::vector<double> mean_coh_p, mean_coh_g, mean_com_p, mean_com_g, mean_pie_p, mean_pie_g;
+      std::vector<std::vector<double>> seed_coh_p(seeds), seed_coh_g(seeds);
+      for (size_t f = 0; f < files.size(); ++f) {
+        const fs::path& file = files[f];
+        const std::string name = file.stem().string(), sz = std::to_string(size);
+        const Image exemplar = synth::load_exemplar_image(file);
+        double cp = coh_p[f], cg = coh_g[f], mp = com_p[f], mg = com_g[f], pp = pie_p[f], pg = pie_g[f];
+        seed_coh_p[0].push_back(coh_p[f]), seed_coh_g[0].push_back(coh_g[f]);
+        for (int sd = 2; sd <= seeds; ++sd) {
+          const fs::path out_p = work / fmt::format("{}_proctex_s{}.png", name, sd),
+                         out_g = work / fmt::format("{}_gmic_s{}.png", name, sd);
+          std::vector<std::string> cmd = {proctex_bin, "-q",     "synth",   file.string(),       "-o",
+                                          out_p.string(), "--size", sz, "--seed", std::to_string(sd)};
+          cmd.insert(cmd.end(), extra_args.begin(), extra_args.end());
+          if (run_process(cmd).exit_code != 0) throw Error("proctex synth failed on " + file.string());
+          if (!(reuse_gmic && fs::exists(out_g)) &&
+              run_process({gmic, file.string(), "-srand", std::to_string(sd), "-syntexturize_matchpatch",
+                           sz + "," + sz, "-o", out_g.string()})
+                      .exit_code != 0)
+            throw Error("gmic failed on " + file.string(), "install it: apt-get install gmic");
+          const Quality qp = quality(exemplar, load_image(out_p)), qg = quality(exemplar, load_image(out_g));
+          cp += qp.coherence, cg += qg.coherence, mp += qp.completeness, mg += qg.completeness;
+          pp += qp.piece, pg += qg.piece;
+          seed_coh_p[sd - 1].push_back(qp.coherence), seed_coh_g[sd - 1].push_back(qg.coherence);
+        }
+        const double n = seeds;
+        mean_coh_p.push_back(cp / n), mean_coh_g.push_back(cg / n), mean_com_p.push_back(mp / n);
+        mean_com_g.push_back(mg / n), mean_pie_p.push_back(pp / n), mean_pie_g.push_back(pg / n);
+        seed_table += fmt::format("| {} | {:.2f} / {:.2f} | {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n", name, cp / n,
+                                  cg / n, mp / n, mg / n, pp / n, pg / n);
+        std::fprintf(stderr, "%s", seed_table.substr(seed_table.rfind("| " + name)).c_str());
+      }
+      seed_table += fmt::format("| **median** | {:.2f} / {:.2f} | {:.2f} / {:.2f} | {:.2f} / {:.2f} |\n",
+                                median(mean_coh_p), median(mean_coh_g), median(mean_com_p), median(mean_com_g),
+                                median(mean_pie_p), median(mean_pie_g));
+      seed_table += "\nMedian coherence per seed, proctex / G'MIC:";
+      for (int sd = 0; sd < seeds; ++sd)
+        seed_table += fmt::format(" seed {}: {:.2f} / {:.2f};", sd + 1, median(seed_coh_p[sd]), median(seed_coh_g[sd]));
+      seed_table += "\n";
+    }
 
     // Analysis of a 256^2 exemplar (no cache), and a big output window by window.
     std::string extra;
@@ -366,7 +428,7 @@ int main(int argc, char** argv) {
       }
     }
     const std::string device = ocl::Runtime::instance().device().name;
-    const std::string report = table + "\n" + extra + fmt::format("- device: {}\n", device);
+    const std::string report = table + seed_table + "\n" + extra + fmt::format("- device: {}\n", device);
     std::printf("%s", report.c_str());
     if (!markdown.empty()) std::ofstream(markdown) << report;
     if (!sheet.empty() && !tiles.empty()) save_image(contact_sheet(tiles, labels, 6, 256), sheet);
