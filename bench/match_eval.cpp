@@ -26,6 +26,7 @@
 // With --pictures: <id>.jpg (photo | match render), real-<split>.jpg (all pairs) and <id>.json
 // (the whole match result with the label and the scores); --json FILE: summary + per-image rows.
 #include <fmt/format.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -107,6 +108,14 @@ bool deterministic(Renderer& r, const ShaderDecl& decl, const std::vector<float>
   return imgs[0].pixels == imgs[1].pixels;
 }
 
+// CPU seconds of this process so far (user + system, every thread: PoCL's workers included). Under
+// load a match's wall time is inflated by the other processes; its CPU time much less.
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 Image side_by_side_tile(const Image& img, int side) { return resize(center_crop_square(img), side, side); }
 
 // The match result's shader ranking: the finalists by their final similarity (the matched shader
@@ -137,7 +146,8 @@ std::string percent(int a, int b) { return b ? fmt::format("{}/{} ({:.0f}%)", a,
 int main(int argc, char** argv) {
   std::string db, photos, pictures, markdown, only, real, split = "tune", real_images = "build/realset/images", json_out,
       override_file;
-  int targets = -1, starts = -1, candidates = -1, screen_resolution = -1, race = -1;
+  int targets = -1, starts = -1, candidates = -1, screen_resolution = -1, race = -1, threads = 0;
+  bool refine_every = false;
   long evaluations = -1;
   uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
@@ -146,7 +156,7 @@ int main(int argc, char** argv) {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
                 "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
                 "[--screen-resolution R] [--race R] [--real LABELS [--split tune|report|all] [--real-images DIR]] "
-                "[--json FILE] [--selection-override FILE]\n"
+                "[--json FILE] [--selection-override FILE] [--threads T] [--refine-every-finalist 1]\n"
                 "  --targets N      synthetic targets (default 53, or 0 with --real)\n"
                 "  --real LABELS    labelled real-texture set (bench/realset/labels.json; build the images with\n"
                 "                   python3 bench/realset/build.py): category / top-3 accuracy, wrong-but-good share\n"
@@ -155,7 +165,10 @@ int main(int argc, char** argv) {
                 "  --json FILE      summary and per-image rows as JSON\n"
                 "  --selection-override FILE\n"
                 "                   {photo id: {shader: probability}}: the selection's probabilities of these photos\n"
-                "                   (bench/fit_selection.py --oof-json: out-of-fold, for photos the model was trained on)");
+                "                   (bench/fit_selection.py --oof-json: out-of-fold, for photos the model was trained on)\n"
+                "  --threads T      host threads of the race (default 0: one per core; 1 as before session 13)\n"
+                "  --refine-every-finalist 1\n"
+                "                   refine the finalists that cannot win too (as before session 13: same answers)");
       return 0;
     }
     if (i + 1 >= argc) {
@@ -180,6 +193,8 @@ int main(int argc, char** argv) {
     else if (a == "--real-images") real_images = v;
     else if (a == "--json") json_out = v;
     else if (a == "--selection-override") override_file = v;
+    else if (a == "--threads") threads = std::stoi(v);
+    else if (a == "--refine-every-finalist") refine_every = v == "1" || v == "yes";
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -214,6 +229,8 @@ int main(int argc, char** argv) {
     if (candidates >= 0) options.candidate_shaders = candidates;
     if (race > 0) options.race = race;
     if (screen_resolution > 0) options.screen_resolution = screen_resolution;
+    options.threads = threads;
+    options.refine_every_finalist = refine_every;
     if (!pictures.empty()) fs::create_directories(pictures);
     Renderer renderer(lib);
     Random rng{seed};
@@ -247,8 +264,10 @@ int main(int argc, char** argv) {
         seed_similarities.push_back(metric.similarity(target_features, metric.features(other, options.resolution)));
       const double ceiling = (seed_similarities[0] + seed_similarities[1] + seed_similarities[2]) / 3.0;
       const auto t0 = std::chrono::steady_clock::now();
+      const double cpu0 = process_cpu_seconds();
       const auto r = search::match(target, store, options);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double cpu = process_cpu_seconds() - cpu0;
       const bool hit = r.spec.shader == decl.name;
       // Rank of the target's shader among the screened candidates by structure (1 = first); past
       // the candidates when it was cut.
@@ -314,13 +333,14 @@ int main(int argc, char** argv) {
       synthetic_rows.push_back({{"target", i + 1}, {"shader", decl.name}, {"matched", r.spec.shader}, {"identified", hit},
                                 {"similarity", r.similarity}, {"ceiling", ceiling},
                                 {"ceiling_per_seed", seed_similarities}, {"ratio", ratio},
-                                {"reproduced", repro}, {"verdict", r.verdict}, {"seconds", secs},
+                                {"reproduced", repro}, {"verdict", r.verdict}, {"seconds", secs}, {"cpu_seconds", cpu},
                                 {"discrete_exact", exact}, {"params_exact", params_exact}, {"image_rmse", image_err}});
-      std::fprintf(stderr, "%2d/%d %-14s (rank %s) -> %-14s S=%.3f ceiling %.3f %-11s %.1f s\n", i + 1, targets,
-                   decl.name.c_str(), rank.c_str(), r.spec.shader.c_str(), r.similarity, ceiling, r.verdict.c_str(), secs);
+      std::fprintf(stderr, "%2d/%d %-14s (rank %s) -> %-14s S=%.3f ceiling %.3f %-11s %.1f s (CPU %.1f s)\n", i + 1,
+                   targets, decl.name.c_str(), rank.c_str(), r.spec.shader.c_str(), r.similarity, ceiling,
+                   r.verdict.c_str(), secs, cpu);
       if (!pictures.empty()) {  // the whole result, to see where a miss was lost (scan, screen, race)
         nlohmann::json j = r.to_json();
-        j["target"] = {{"spec", spec_from_packed(decl, packed, render_seed).to_json()}, {"seconds", secs},
+        j["target"] = {{"spec", spec_from_packed(decl, packed, render_seed).to_json()}, {"seconds", secs}, {"cpu_seconds", cpu},
                        {"ceiling", ceiling}, {"ceiling_per_seed", seed_similarities}, {"reproduced", repro}};
         std::ofstream(fs::path(pictures) / fmt::format("{:02d}-{}.json", i + 1, decl.name)) << j.dump(1) << "\n";
       }
@@ -401,7 +421,7 @@ int main(int argc, char** argv) {
         std::string id, kind;
         std::vector<std::string> accepted, top3;
         std::string matched, verdict;
-        double similarity = 0, seconds = 0;
+        double similarity = 0, seconds = 0, cpu_seconds = 0;
         bool right = false, right3 = false;
       };
       std::vector<Row> rows;
@@ -436,8 +456,10 @@ int main(int argc, char** argv) {
         else if (!override_file.empty())
           throw Error(row.id + " has no probabilities in " + override_file, "give every photo of the split");
         const auto t0 = std::chrono::steady_clock::now();
+        const double cpu0 = process_cpu_seconds();
         const auto r = search::match(target, store, photo_options);
         row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        row.cpu_seconds = process_cpu_seconds() - cpu0;
         row.matched = r.spec.shader;
         row.similarity = r.similarity;
         row.verdict = r.verdict;
@@ -448,14 +470,14 @@ int main(int argc, char** argv) {
           row.top3.push_back(ranking[k]);
           row.right3 |= ok.count(ranking[k]) > 0;
         }
-        std::fprintf(stderr, "%2zu/%zu %-40s %-14s -> %-14s S=%.3f %-11s %s %.1f s\n", n + 1, items.size(), row.id.c_str(),
-                     row.kind.c_str(), row.matched.c_str(), row.similarity, row.verdict.c_str(),
-                     row.right ? "right" : (row.right3 ? "top-3" : "WRONG"), row.seconds);
+        std::fprintf(stderr, "%2zu/%zu %-40s %-14s -> %-14s S=%.3f %-11s %s %.1f s (CPU %.1f s)\n", n + 1, items.size(),
+                     row.id.c_str(), row.kind.c_str(), row.matched.c_str(), row.similarity, row.verdict.c_str(),
+                     row.right ? "right" : (row.right3 ? "top-3" : "WRONG"), row.seconds, row.cpu_seconds);
         if (!pictures.empty()) {
           nlohmann::json j = r.to_json();
           j["label"] = item;
           j["evaluation"] = {{"right", row.right}, {"top3", row.top3}, {"right_top3", row.right3},
-                             {"ranking", ranking}, {"seconds", row.seconds}};
+                             {"ranking", ranking}, {"seconds", row.seconds}, {"cpu_seconds", row.cpu_seconds}};
           std::ofstream(fs::path(pictures) / (row.id + ".json")) << j.dump(1) << "\n";
           RenderSettings rs;
           rs.width = rs.height = 256;
@@ -477,7 +499,7 @@ int main(int argc, char** argv) {
 
       const int total = static_cast<int>(rows.size());
       int right = 0, right3 = 0, wrong_good = 0, good_total = 0, good_right = 0, approx = 0;
-      std::vector<double> secs;
+      std::vector<double> secs, cpu_secs;
       std::map<std::string, std::array<int, 3>> per_kind;  // n, right, top-3
       for (const auto& row : rows) {
         right += row.right;
@@ -487,6 +509,7 @@ int main(int argc, char** argv) {
         wrong_good += row.verdict == "good" && !row.right;
         approx += row.verdict == "approximate";
         secs.push_back(row.seconds);
+        cpu_secs.push_back(row.cpu_seconds);
         auto& k = per_kind[row.kind];
         k[0]++;
         k[1] += row.right;
@@ -495,9 +518,9 @@ int main(int argc, char** argv) {
       real_report = fmt::format(
           "Real set ({}, split {}): {} images; category accuracy {}, top-3 accuracy {}, wrong-category results "
           "called good {} of the wrong ones, precision of good (right kind among good) {}; verdicts good {} / "
-          "approximate {} / no-match {}; time per match median {:.1f} s.\n\n",
+          "approximate {} / no-match {}; time per match median {:.1f} s (CPU {:.1f} s).\n\n",
           real, split, total, percent(right, total), percent(right3, total), percent(wrong_good, total - right),
-          percent(good_right, good_total), good_total, approx, total - good_total - approx, median(secs));
+          percent(good_right, good_total), good_total, approx, total - good_total - approx, median(secs), median(cpu_secs));
       real_report += "| kind | images | right | top-3 |\n|---|---|---|---|\n";
       for (const auto& [kind, k] : per_kind) real_report += fmt::format("| {} | {} | {} | {} |\n", kind, k[0], k[1], k[2]);
       real_report +=
@@ -510,7 +533,8 @@ int main(int argc, char** argv) {
                                    row.right ? "yes" : (row.right3 ? "no (top-3)" : "no"), join(row.top3), row.seconds);
         jrows.push_back({{"id", row.id}, {"kind", row.kind}, {"accepted", row.accepted}, {"matched", row.matched},
                          {"similarity", row.similarity}, {"verdict", row.verdict}, {"right", row.right},
-                         {"top3", row.top3}, {"right_top3", row.right3}, {"seconds", row.seconds}});
+                         {"top3", row.top3}, {"right_top3", row.right3}, {"seconds", row.seconds},
+                         {"cpu_seconds", row.cpu_seconds}});
       }
       real_json = {{"labels", real},
                    {"split", split},
@@ -524,6 +548,7 @@ int main(int argc, char** argv) {
                    {"wrong_good", wrong_good},
                    {"good", good_total},
                    {"median_seconds", median(secs)},
+                   {"median_cpu_seconds", median(cpu_secs)},
                    {"rows", jrows}};
     }
 

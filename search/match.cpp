@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "catalog/store.h"
 #include "core/error.h"
@@ -28,6 +31,35 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// fn(0) ... fn(n - 1) on up to `threads` threads (this one included); the first exception is
+// rethrown after all have stopped.
+void for_each_parallel(size_t n, int threads, const std::function<void(size_t)>& fn) {
+  const size_t count = std::min<size_t>(n, static_cast<size_t>(std::max(1, threads)));
+  if (count <= 1) {
+    for (size_t i = 0; i < n; ++i) fn(i);
+    return;
+  }
+  std::atomic<size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto worker = [&] {
+    for (size_t i; (i = next++) < n;) {
+      try {
+        fn(i);
+      } catch (...) {
+        std::lock_guard lock(error_mutex);
+        if (!error) error = std::current_exception();
+        next = n;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < count; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
 
 struct Start {
   std::string shader;
@@ -182,6 +214,11 @@ constexpr long kScanRefineEvaluations = 120;
 constexpr int kPairMaxLevels = 16;
 constexpr int kPairLevels = 16;
 constexpr long kSettleEvaluations = 80;
+// An unrefined finalist (one that cannot win the final choice on log S + log P) is refined after
+// all when its similarity times this reaches kOutclassedRatio times the choice's: the most that
+// the rest of its refinement is assumed to raise its full-resolution similarity (measured:
+// docs/performance.md "Match", session 13).
+constexpr double kUnrefinedGain = 1.5;
 constexpr double kPolishStopRmse = 3e-4;  // a polished finalist this exact ends the other polishes  // the settle's renders (default metric, counts pinned)
 // The align stage (search/align.h; counts and colours pinned): kAlignEvaluations renders.
 constexpr int kAlignMirrorPairDims = 6;  // up to this many dimensions, pairs are mirrored too
@@ -497,6 +534,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     std::unique_ptr<ParameterSpace> space;
     std::unique_ptr<Objective> objective;
     RefineResult refined;
+    double race_similarity = 0.0;  // coarse, at the end of the race
   };
   const int race = std::max(o.starts, o.race);
   std::vector<Lane> lanes;
@@ -523,6 +561,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     lane.start = std::move(st);
     lanes.push_back(std::move(lane));
   }
+  std::mutex lane_mutex;  // run_lane may run on several threads (the race): guards the shared state
   auto run_lane = [&](Lane& lane, long max_evaluations, const std::string& stage) {
     Objective& objective = *lane.objective;
     const long before = objective.evaluations();
@@ -544,6 +583,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (spent) objective.stop();
     objective.on_progress = [&](const Objective& obj) {
       if (stop && *stop) objective.stop();
+      std::lock_guard lock(lane_mutex);
       if (obj.best().similarity > state.best) {
         state.best = obj.best().similarity;
         state.best_shader = lane.start.shader;
@@ -560,12 +600,22 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       const auto r = refine(objective, lane.refined.unit, options);
       if (r.similarity >= lane.refined.similarity) lane.refined = r;
     }
+    std::lock_guard lock(lane_mutex);
     evaluations += objective.evaluations() - before;
     result.stopped_early |= objective.exhausted() || (stop && *stop);
   };
   const long short_run = std::max<long>(30, o.refine.max_evaluations / 5);
-  for (size_t i = 0; i < lanes.size(); ++i)
+  // The race's lanes are independent (each its own objective, start and seed), so they run on
+  // several host threads: one lane computes its features while another's render runs on the
+  // device, and the result is the same as one after the other (test Match.ParallelRace*). Not
+  // under a render budget (--budget N), which is spent in the lanes' order.
+  const int race_threads = o.budget.max_evaluations > 0 ? 1
+                           : o.threads > 0               ? o.threads
+                                                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for_each_parallel(lanes.size(), race_threads, [&](size_t i) {
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
+  });
+  for (auto& lane : lanes) lane.race_similarity = lane.refined.similarity;
   // The final choice weighs the similarity with the selection's probability of the shader: a
   // flexible shader that tunes itself into a look-alike must also be a likely material.
   // `share`: the part of selection_weight the selection gets (less on clean patterns, below).
@@ -618,9 +668,85 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     lanes = std::move(ordered);
     finalists = static_cast<size_t>(std::count(pick.begin(), pick.end(), true));
   }
-  for (size_t i = 0; i < finalists; ++i)
+  auto refine_finalist = [&](size_t i, size_t done) {
     run_lane(lanes[i], std::max<long>(1, o.refine.max_evaluations - lanes[i].objective->evaluations()),
-             "refine " + std::to_string(i + 1) + "/" + std::to_string(finalists));
+             "refine " + std::to_string(done) + "/" + std::to_string(finalists));
+  };
+  // The full-resolution score of a finalist's point: what the final choice compares (stage 4).
+  RenderSettings full;
+  full.width = full.height = o.resolution;
+  const std::vector<double> target_shape = shape_statistics(target, o.resolution);
+  struct FullScore {
+    double similarity = 0.0;
+    metrics::Features features;
+    double shape_distance = 0.0;
+    Image image;
+  };
+  auto score_full = [&](size_t i) {
+    const Lane& lane = lanes[i];
+    FullScore fs;
+    fs.image = renderer.render_batch(*lane.decl, {lane.space->to_packed(lane.refined.unit)},
+                                     {lane.start.sample->seed}, full).front();
+    fs.features = metric.features(fs.image, o.resolution);
+    fs.similarity = metric.similarity(target_full, fs.features);
+    ++evaluations;
+    fs.shape_distance = shape_distance(target_shape, shape_statistics(fs.image, o.resolution));
+    return fs;
+  };
+  std::vector<std::optional<FullScore>> scored(finalists);
+  std::vector<bool> unrefined(finalists, false);
+  if (pattern || o.refine_every_finalist) {
+    for (size_t i = 0; i < finalists; ++i) refine_finalist(i, i + 1);
+  } else {
+    // Finalists that cannot win are not refined further (renders are the match's time). The final
+    // choice maximises log S + lambda log P with S <= 1, so a finalist whose lambda log P is not
+    // above the best score already reached by a refined finalist at the full resolution cannot be
+    // chosen by it, however far it were refined: such a finalist keeps its race point (and is still
+    // scored, for the outclassed rule below and the JSON). The likeliest finalists go first, so
+    // that bound is set early. Not on clean patterns (their polish and certain-match rules decide
+    // there), nor for a seed-independent point (its exact polish could make it pixel-exact, which
+    // wins outright).
+    std::vector<size_t> by_decision(finalists);
+    for (size_t i = 0; i < finalists; ++i) by_decision[i] = i;
+    std::stable_sort(by_decision.begin(), by_decision.end(), [&](size_t a, size_t b) {
+      return decision(lanes[a].refined.similarity, lanes[a].start.probability) >
+             decision(lanes[b].refined.similarity, lanes[b].start.probability);
+    });
+    const auto achieved = [&](size_t i) {
+      return decision(scored[i]->similarity, lanes[i].start.probability) - o.shape_weight * scored[i]->shape_distance;
+    };
+    double best = -std::numeric_limits<double>::infinity();
+    size_t done = 0;
+    for (size_t i : by_decision) {
+      ++done;
+      Lane& lane = lanes[i];
+      if (decision(1.0, lane.start.probability) <= best) {
+        unrefined[i] = !nearly_deterministic(renderer, *lane.decl, lane.space->to_packed(lane.refined.unit),
+                                             lane.start.sample->seed);
+        evaluations += 2;
+      }
+      if (!unrefined[i]) refine_finalist(i, done);
+      scored[i] = score_full(i);
+      best = std::max(best, achieved(i));
+    }
+    // The outclassed rule (stage 4) can still choose an unrefined finalist when its similarity is
+    // far above the choice's: one within reach of that (refinement raising its similarity by up to
+    // kUnrefinedGain) is refined after all, and the choice looked at again.
+    for (bool again = true; again;) {
+      again = false;
+      size_t choice = 0;
+      for (size_t i = 1; i < finalists; ++i)
+        if (achieved(i) > achieved(choice)) choice = i;
+      for (size_t i = 0; i < finalists; ++i)
+        if (unrefined[i] &&
+            scored[i]->similarity * kUnrefinedGain >= kOutclassedRatio * scored[choice]->similarity) {
+          unrefined[i] = false;
+          refine_finalist(i, finalists);
+          scored[i] = score_full(i);
+          again = true;
+        }
+    }
+  }
   struct Refined {
     const ShaderDecl* decl;  // packed: the refined point (replaced by its polish when that is better)
     std::vector<float> packed;
@@ -641,8 +767,10 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
                              {"colours_fitted", lane.colours.fitted},
                              {"colour_similarity", {{"catalogue", lane.colours.before}, {"fitted", lane.colours.after}}},
                              {"refined_similarity_coarse", lane.refined.similarity},
+                             {"race_similarity_coarse", lane.race_similarity},
                              {"finalist", i < finalists},
                              {"evaluations", lane.objective->evaluations()}});
+    if (i < finalists && unrefined[i]) result.starts.back()["refined"] = false;  // cannot win: see above
   }
   result.timings["local"] = seconds_since(t_local);
 
@@ -651,8 +779,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // one more candidate; the choice weighs similarity with the selection.
   report("final");
   const auto t_final = Clock::now();
-  RenderSettings full;
-  full.width = full.height = o.resolution;
   const metrics::MagnitudeMetric magnitude(o.coarse_resolution);
   const metrics::Features target_magnitude = magnitude.features(target, o.coarse_resolution);
   const metrics::MagnitudeMetric blurred_magnitude(o.coarse_resolution, kPolishBlurBins);
@@ -672,7 +798,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     bool seed_independent = false;  // measured on clean patterns only
     double shape_distance = 0;      // to the target (selection.h); 0 for polished points
   };
-  const std::vector<double> target_shape = shape_statistics(target, o.resolution);
   // On a clean pattern, a seed-independent finalist's registered RMS: what decides whether its
   // S >= kCertainMatch may still call it "good" (kVisiblyOtherRmse).
   const auto measure_exactness = [&](Candidate& c, const Image& render) {
@@ -686,16 +811,15 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   std::vector<Candidate> final_candidates;
   for (size_t i = 0; i < refined.size(); ++i) {
     const auto& rf = refined[i];
-    const Image img = renderer.render_batch(*rf.decl, {rf.packed}, {rf.seed}, full).front();
-    metrics::Features f = metric.features(img, o.resolution);
-    const double s = metric.similarity(target_full, f);
-    ++evaluations;
+    if (!scored[i]) scored[i] = score_full(i);  // scored already when the finalists were (not patterns)
+    FullScore& fs = *scored[i];
+    const double s = fs.similarity;
     result.starts[i]["refined_similarity"] = s;  // finalists come first in `starts`
-    const double shape = shape_distance(target_shape, shape_statistics(img, o.resolution));
+    const double shape = fs.shape_distance;
     result.starts[i]["shape_distance"] = shape;
-    final_candidates.push_back({&rf, rf.packed, s, std::move(f), nlohmann::json::object()});
+    final_candidates.push_back({&rf, rf.packed, s, std::move(fs.features), nlohmann::json::object()});
     final_candidates.back().shape_distance = shape;
-    measure_exactness(final_candidates.back(), img);
+    measure_exactness(final_candidates.back(), fs.image);
     if (final_candidates.back().image_rmse >= 0) result.starts[i]["image_rmse"] = final_candidates.back().image_rmse;
   }
 
