@@ -10,9 +10,10 @@ copy, Hann window, at 5 scales 0.5-2 of that copy) with each labelled photo of t
 resolution, the best over the scales; prints the highest peaks, one line per candidate:
 "candidate  peak  photo  scale ...". A photo compared with its own centre peaks near 1; unrelated
 textures at about 0.01-0.05 (docs/realset.md gives this set's numbers); pairs above --threshold
-(default 0.08) are marked "LOOK" and must be looked at side by side. Exact copies: --sources compares
-sha256 of the candidates' source files with the labelled items' (build/realset/src and the package
-trees are not needed: pass the source files). Needs numpy, scipy, oiiotool.
+(default 0.08) are marked "LOOK" and must be looked at side by side. Calibration on this set: a
+photo's own centre and the known same-texture pairs (bricks-nexuiz-bricks01 / bricks-ufoai-wall043,
+fabric-ufoai-couch_d / textil001) peak at about 0.25, unrelated photos at 0.03-0.05. Exact copies
+are found separately, by the sha256 of the source files. Needs numpy, scipy, oiiotool.
 """
 import argparse
 import hashlib
