@@ -12,6 +12,7 @@
 
 #include "catalog/thumbnail.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "kernels/runtime.h"
 #include "shaders/parameter_space.h"
 
@@ -249,34 +250,6 @@ class Rng {
  private:
   uint64_t state_;
 };
-
-template <typename Fn>
-void parallel_for(size_t n, int jobs, Fn&& fn) {
-  const size_t threads = std::min<size_t>(std::max(1, jobs), n);
-  if (threads <= 1) {
-    for (size_t i = 0; i < n; ++i) fn(i);
-    return;
-  }
-  std::atomic<size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto worker = [&] {
-    for (size_t i; (i = next++) < n;) {
-      try {
-        fn(i);
-      } catch (...) {
-        std::lock_guard lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = n;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-}
 
 struct Point {
   std::vector<double> unit;  // snapped

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "catalog/catalog.h"
+#include "core/parallel.h"
 #include "catalog/store.h"
 #include "cli/commands.h"
 #include "cli/output.h"
@@ -189,7 +190,7 @@ void run(const MorphCli& c, const GlobalOptions& global) {
       // PNG encoding costs as much as rendering: one file per thread.
       std::vector<Image> small(images.size());
       const int gif_side = std::min(c.gif_size, c.size);
-      transform::parallel_for(images.size(), c.jobs, [&](size_t k) {
+      parallel_for(images.size(), c.jobs, [&](size_t k) {
         save_image(images[k], dir / fmt::format("frame_{:0{}d}.png", first + k + 1, digits));
         if (!c.gif.empty()) small[k] = resize(images[k], gif_side, gif_side);
       });

@@ -14,6 +14,7 @@
 
 #include "catalog/store.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "kernels/runtime.h"
 #include "metrics/composite.h"
 #include "metrics/aligned.h"
@@ -31,35 +32,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-// fn(0) ... fn(n - 1) on up to `threads` threads (this one included); the first exception is
-// rethrown after all have stopped.
-void for_each_parallel(size_t n, int threads, const std::function<void(size_t)>& fn) {
-  const size_t count = std::min<size_t>(n, static_cast<size_t>(std::max(1, threads)));
-  if (count <= 1) {
-    for (size_t i = 0; i < n; ++i) fn(i);
-    return;
-  }
-  std::atomic<size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto worker = [&] {
-    for (size_t i; (i = next++) < n;) {
-      try {
-        fn(i);
-      } catch (...) {
-        std::lock_guard lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = n;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < count; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-}
 
 struct Start {
   std::string shader;
@@ -612,7 +584,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const int race_threads = o.budget.max_evaluations > 0 ? 1
                            : o.threads > 0               ? o.threads
                                                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  for_each_parallel(lanes.size(), race_threads, [&](size_t i) {
+  parallel_for(lanes.size(), race_threads, [&](size_t i) {
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
   });
   for (auto& lane : lanes) lane.race_similarity = lane.refined.similarity;

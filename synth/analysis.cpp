@@ -18,6 +18,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/hash.h"
 
 namespace proctex::synth {
@@ -286,28 +287,6 @@ std::vector<int32_t> coherence_level(int w, int h, bool toroidal, const Analysis
   return nn;
 }
 
-template <typename Fn>
-void parallel_for(int count, Fn&& fn) {
-  const int threads = std::max(1, std::min<int>(count, static_cast<int>(std::thread::hardware_concurrency())));
-  std::atomic<int> next{0};
-  std::vector<std::thread> pool;
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  for (int t = 0; t < threads; ++t)
-    pool.emplace_back([&] {
-      for (int i; (i = next++) < count;) {
-        try {
-          fn(i);
-        } catch (...) {
-          std::lock_guard lock(error_mutex);
-          error = std::current_exception();
-        }
-      }
-    });
-  for (auto& th : pool) th.join();
-  if (error) std::rethrow_exception(error);
-}
-
 std::string content_hash(const Exemplar& ex, const Channels& ch, bool toroidal, int candidates) {
   std::string key = fmt::format("proctex-synth-analysis v{} {}x{} c{} t{} w{:.6f} k{}|", kAnalysisVersion, ch.width,
                                 ch.height, ch.count, toroidal ? 1 : 0, ex.map_weight, candidates);
@@ -514,7 +493,7 @@ Analysis analyse(const Exemplar& ex, const AnalysisOptions& options) {
   const Sampler s{ch.width, ch.height, a.toroidal};
   const auto stack = gaussian_stack(ch, a.levels, s);
   a.level.resize(a.levels + 1);
-  parallel_for(a.levels + 1, [&](int l) {
+  parallel_for(a.levels + 1, 0, [&](int l) {
     auto& lv = a.level[l];
     lv.spacing = 1 << (a.levels - l);
     appearance_level(ch, stack[l], lv.spacing, s, lv);

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/hash.h"
 #include "kernels/buffers.h"
 #include "kernels/runtime.h"
@@ -38,28 +39,6 @@ using detail::level_count;
 using detail::reflect;
 using detail::Sampler;
 using detail::wrap;
-
-template <typename Fn>
-void parallel_for(int count, Fn&& fn) {
-  const int threads = std::max(1, std::min<int>(count, static_cast<int>(std::thread::hardware_concurrency())));
-  std::atomic<int> next{0};
-  std::vector<std::thread> pool;
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  for (int t = 0; t < threads; ++t)
-    pool.emplace_back([&] {
-      for (int i; (i = next++) < count;) {
-        try {
-          fn(i);
-        } catch (...) {
-          std::lock_guard lock(error_mutex);
-          error = std::current_exception();
-        }
-      }
-    });
-  for (auto& th : pool) th.join();
-  if (error) std::rethrow_exception(error);
-}
 
 // The Gaussian stack of an sRGB-encoded colour image (planar, 3 channels) as in analysis.cpp:
 // level l = level l + 1 filtered with [1 4 6 4 1] / 16 at spacing 2^(L-l-1), separably.
@@ -496,7 +475,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
 
   // Gaussian stacks of the sRGB-encoded colours; node n = i * (L + 1) + k.
   std::vector<std::vector<float>> planes(N);  // planar 3 x n per node
-  parallel_for(a.exemplars, [&](int i) {
+  parallel_for(a.exemplars, 0, [&](int i) {
     std::vector<float> planar(3 * n);
     const auto& px = lg.images[i].pixels;
     for (size_t t = 0; t < n; ++t)
@@ -551,7 +530,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
   const Eigen::MatrixXd axes = principal_axes(cov, kDims, top);
   const double scale = top > 1e-12 ? 127.0 / (3.5 * std::sqrt(top)) : 0.0;
   a.appearance.resize(N * n * kDims);
-  parallel_for(static_cast<int>(N), [&](int nd) {
+  parallel_for(static_cast<int>(N), 0, [&](int nd) {
     Eigen::VectorXd v(kAppIn);
     for (size_t t = 0; t < n; ++t) {
       gather(nd, t, v.data());
@@ -608,7 +587,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
         a.projection[d * kDims + k] = static_cast<int32_t>(std::lround(ax2(d, k) * (1 << kProjectionShift)));
   }
   a.feature.resize(N * n * kDims);
-  parallel_for(static_cast<int>(N), [&](int nd) {
+  parallel_for(static_cast<int>(N), 0, [&](int nd) {
     int8_t buf[kGraphNeighbourDims];
     for (size_t t = 0; t < n; ++t) {
       taps(nd, t, buf);
@@ -630,7 +609,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
   // k-coherence (k = 2): a similar texel at least 5% of the exemplar away, on the same stack level.
   const int sep = std::max(2, static_cast<int>(std::lround(0.05 * std::max(w, h))));
   a.coherent.assign(N * n, 0);
-  parallel_for(static_cast<int>(N), [&](int nd) {
+  parallel_for(static_cast<int>(N), 0, [&](int nd) {
     if (!used[nd]) {
       for (size_t t = 0; t < n; ++t) a.coherent[nd * n + t] = static_cast<int32_t>(t);
       return;
@@ -664,7 +643,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
   // Local mean colour (25 taps, Han's b) per texel of every node, for the offsets and the
   // offset-invariant matching between different exemplars.
   std::vector<float> local_mean(N * n * 3, 0.0f);
-  parallel_for(static_cast<int>(N), [&](int nd) {
+  parallel_for(static_cast<int>(N), 0, [&](int nd) {
     if (!used[nd]) return;
     const Sampler s = sampler_of(nd);
     const int sp = 1 << (L - static_cast<int>(nd % (L + 1)));
@@ -692,7 +671,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
       G[k][c] = acc;
     }
   std::vector<float> mean_free(N * n * kDims, 0.0f);
-  parallel_for(static_cast<int>(N), [&](int nd) {
+  parallel_for(static_cast<int>(N), 0, [&](int nd) {
     if (!used[nd]) return;
     for (size_t t = 0; t < n; ++t)
       for (int k = 0; k < kDims; ++k) {
@@ -703,7 +682,7 @@ GraphAnalysis analyse_graph(const LoadedGraph& lg) {
   });
   a.link_texel.assign(N * M * n, 0);
   a.link_offset.assign(N * M * n * 4, 0);
-  parallel_for(static_cast<int>(N * M), [&](int job) {
+  parallel_for(static_cast<int>(N * M), 0, [&](int job) {
     const size_t nd = job / M, s = job % M;
     const int dst = a.link_node[nd * M + s];
     if (dst < 0) return;

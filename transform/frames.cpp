@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "image/io.h"
 
 namespace proctex::transform {
@@ -31,33 +32,6 @@ nlohmann::json Quality::to_json() const {
           {"worst_step", worst_step},
           {"layout_mean", layout_mean},
           {"layout_max", layout_max}};
-}
-
-void parallel_for(size_t n, int jobs, const std::function<void(size_t)>& fn) {
-  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const size_t threads = std::min<size_t>(jobs > 0 ? jobs : hw, n);
-  if (threads <= 1) {
-    for (size_t i = 0; i < n; ++i) fn(i);
-    return;
-  }
-  std::atomic<size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex m;
-  auto worker = [&] {
-    for (size_t i; (i = next++) < n;) {
-      try {
-        fn(i);
-      } catch (...) {
-        std::lock_guard lock(m);
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
 }
 
 std::vector<metrics::Features> render_features(Renderer& renderer, const ShaderDecl& decl,

@@ -44,9 +44,6 @@ struct Quality {
   nlohmann::json to_json() const;
 };
 
-// Runs fn(i) for i in [0, n) on `jobs` threads (0: hardware concurrency).
-void parallel_for(size_t n, int jobs, const std::function<void(size_t)>& fn);
-
 // Renders packed vectors of one shader at resolution x resolution and computes their default-metric
 // features (jobs threads for the metric).
 std::vector<metrics::Features> render_features(Renderer& renderer, const ShaderDecl& decl,
