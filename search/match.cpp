@@ -534,6 +534,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     lanes.push_back(std::move(lane));
   }
   std::mutex lane_mutex;  // run_lane may run on several threads (the race): guards the shared state
+  // Renders of the lanes still running, so that the reported count only grows while several lanes
+  // progress at once (each lane's own count added to the finished lanes' total went back and forth).
+  long running_evaluations = 0;
   auto run_lane = [&](Lane& lane, long max_evaluations, const std::string& stage) {
     Objective& objective = *lane.objective;
     const long before = objective.evaluations();
@@ -553,6 +556,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     }
     objective.set_budget(budget);
     if (spent) objective.stop();
+    long counted = 0;  // this lane's renders in running_evaluations
     objective.on_progress = [&](const Objective& obj) {
       if (stop && *stop) objective.stop();
       std::lock_guard lock(lane_mutex);
@@ -561,7 +565,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         state.best_shader = lane.start.shader;
         state.best_spec = spec_from_packed(*lane.decl, obj.best().packed, lane.start.sample->seed);
       }
-      state.evaluations = evaluations + obj.evaluations() - before;
+      running_evaluations += obj.evaluations() - before - counted;
+      counted = obj.evaluations() - before;
+      state.evaluations = evaluations + running_evaluations;
       report(stage);
     };
     if (objective.exhausted() || (stop && *stop)) {
@@ -573,6 +579,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       if (r.similarity >= lane.refined.similarity) lane.refined = r;
     }
     std::lock_guard lock(lane_mutex);
+    running_evaluations -= counted;
     evaluations += objective.evaluations() - before;
     result.stopped_early |= objective.exhausted() || (stop && *stop);
   };

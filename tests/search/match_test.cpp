@@ -8,6 +8,8 @@
 // file lock, which builds it the first time (~40 s on an idle 2-core machine) and skips every
 // unchanged shader afterwards (a shader source or metric change rebuilds just what changed).
 // Targets are rendered with seeds >= 9000; the catalogue's render seeds come from its own stream.
+#include <mutex>
+
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 #include <sys/file.h>
@@ -322,6 +324,26 @@ TEST(Match, ParallelRaceGivesTheSameResultAsOneThread) {
     EXPECT_EQ(a.starts[i]["refined_similarity_coarse"], b.starts[i]["refined_similarity_coarse"]) << i;
     EXPECT_EQ(a.starts[i]["evaluations"], b.starts[i]["evaluations"]) << i;
   }
+}
+
+// With the race on several threads the progress a service shows must still only count up: each
+// lane's own count added to the finished lanes' total went back and forth between two lanes (a
+// job's live count fell from 193 to 179 in JobsPriority, session 13).
+TEST(Match, ProgressCountOnlyGrowsDuringAParallelRace) {
+  const Image target = render("clouds:seed=9021");
+  MatchOptions two = quick();
+  two.threads = 2;
+  catalog::Store store(shared_catalogue(), catalog::Store::Access::Read);
+  long last = 0, reports = 0, went_back = 0;
+  std::mutex m;
+  match(target, store, two, [&](const MatchProgress& p) {
+    std::lock_guard lock(m);
+    ++reports;
+    if (p.evaluations < last) ++went_back;
+    last = std::max(last, p.evaluations);
+  });
+  EXPECT_GT(reports, 10);
+  EXPECT_EQ(went_back, 0) << "of " << reports << " progress reports";
 }
 
 // A finalist that cannot win the final choice (log S + log P with S <= 1: its log P is below the
