@@ -21,7 +21,7 @@ if ! command -v npm >/dev/null 2>&1; then
   packages+=(nodejs npm)
 fi
 if [[ "${1:-}" == "--with-bench" ]]; then
-  packages+=(hyperfine python3 python3-numpy python3-sklearn)  # python3: bench/realset/build.py (fetches its own game-data .debs); numpy: bench/fit_selection.py; sklearn: bench/select_classifiers.py
+  packages+=(hyperfine python3 python3-numpy python3-sklearn python3-scipy)  # python3: bench/realset/build.py (fetches its own game-data .debs); numpy: bench/fit_selection.py; sklearn: bench/select_classifiers.py; scipy: bench/realset/dedup.py
   # bench_synth: G'MIC (what users run today) and real exemplars from Debian texture packages.
   packages+=(gmic neverball-data extremetuxracer-data colobot-common-textures)
 fi
