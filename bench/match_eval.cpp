@@ -11,7 +11,8 @@
 // scan of the catalogue (what --candidates cuts), final similarity, verdict, time; for
 // deterministic shaders (two render seeds give the same image) the parameter error: mean
 // |unit difference| over the searchable dimensions, whether every discrete parameter is exact,
-// whether all are (issue 12: discrete exact and every continuous one within 2% of its range), and
+// whether all are (issue 12: discrete exact and every continuous one within 2% of its range; a
+// parameter with a declared symmetry period compared modulo it, as shader metadata says), and
 // the image's RMS difference at the best whole-pixel shift (aliases that render the same image).
 // Photos: every image in --photos is matched, with a side-by-side picture in --pictures.
 // Noise ceiling (synthetic): the target's spec rendered with other render seeds (+1, 2, 3 x 10^6),
@@ -293,12 +294,25 @@ int main(int argc, char** argv) {
       if (deterministic(renderer, decl, packed)) {
         ++det_total;
         if (hit) {
-          const auto matched = space.to_unit(resolve(decl, r.spec));
+          const auto matched_packed = resolve(decl, r.spec);
+          const auto matched = space.to_unit(matched_packed);
+          // |unit difference| per dimension; a parameter with a declared symmetry period
+          // (shader.h `period=`: a star turned by 360/n is the same image) is compared modulo
+          // its period at the target's counts, as a fraction of its range (linear by declaration).
+          std::vector<double> diff(unit.size());
+          for (size_t d = 0; d < unit.size(); ++d) {
+            const Dimension& dim = space.dims()[d];
+            diff[d] = std::fabs(matched[d] - unit[d]);
+            if (dim.param->period > 0.0f && !dim.levels)
+              diff[d] = parameter_difference(decl, *dim.param, matched_packed[dim.param->offset],
+                                             packed[dim.param->offset], packed) /
+                        (dim.param->max - dim.param->min);
+          }
           double sum = 0;
           bool all_exact = true;
           for (size_t d = 0; d < unit.size(); ++d) {
-            sum += std::fabs(matched[d] - unit[d]);
-            if (space.dims()[d].levels && std::fabs(matched[d] - unit[d]) > 1e-6) all_exact = false;
+            sum += diff[d];
+            if (space.dims()[d].levels && diff[d] > 1e-6) all_exact = false;
           }
           const double e = unit.empty() ? 0.0 : sum / unit.size();
           param_errors.push_back(e);
@@ -308,7 +322,7 @@ int main(int argc, char** argv) {
           // The issue's criterion: discrete exact and every continuous one within 2% of its range.
           bool within = all_exact;
           for (size_t d = 0; d < unit.size(); ++d)
-            if (!space.dims()[d].levels && std::fabs(matched[d] - unit[d]) > 0.02) within = false;
+            if (!space.dims()[d].levels && diff[d] > 0.02) within = false;
           det_params_exact += within;
           params_exact = within ? "yes" : "no";
         } else {
