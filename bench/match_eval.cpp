@@ -11,7 +11,8 @@
 // scan of the catalogue (what --candidates cuts), final similarity, verdict, time; for
 // deterministic shaders (two render seeds give the same image) the parameter error: mean
 // |unit difference| over the searchable dimensions, whether every discrete parameter is exact,
-// whether all are (issue 12: discrete exact and every continuous one within 2% of its range), and
+// whether all are (issue 12: discrete exact and every continuous one within 2% of its range; a
+// parameter with a declared symmetry period compared modulo it, as shader metadata says), and
 // the image's RMS difference at the best whole-pixel shift (aliases that render the same image).
 // Photos: every image in --photos is matched, with a side-by-side picture in --pictures.
 // Noise ceiling (synthetic): the target's spec rendered with other render seeds (+1, 2, 3 x 10^6),
@@ -240,7 +241,7 @@ int main(int argc, char** argv) {
         "renders | param error | discrete exact | params exact | image RMSE |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     std::vector<double> sims, times, param_errors, ranks, ceilings, ratios;
-    int identified = 0, det_total = 0, det_exact = 0, det_params_exact = 0, det_params_equivalent = 0, det_image_exact = 0, good = 0, approximate = 0, reproduced = 0;
+    int identified = 0, det_total = 0, det_exact = 0, det_params_exact = 0, det_params_inert = 0, det_params_equivalent = 0, det_image_exact = 0, good = 0, approximate = 0, reproduced = 0;
     const metrics::Metric& metric = metrics::default_metric();
     nlohmann::json synthetic_rows = nlohmann::json::array();
     std::vector<Image> tiles;
@@ -293,12 +294,25 @@ int main(int argc, char** argv) {
       if (deterministic(renderer, decl, packed)) {
         ++det_total;
         if (hit) {
-          const auto matched = space.to_unit(resolve(decl, r.spec));
+          const auto matched_packed = resolve(decl, r.spec);
+          const auto matched = space.to_unit(matched_packed);
+          // |unit difference| per dimension; a parameter with a declared symmetry period
+          // (shader.h `period=`: a star turned by 360/n is the same image) is compared modulo
+          // its period at the target's counts, as a fraction of its range (linear by declaration).
+          std::vector<double> diff(unit.size());
+          for (size_t d = 0; d < unit.size(); ++d) {
+            const Dimension& dim = space.dims()[d];
+            diff[d] = std::fabs(matched[d] - unit[d]);
+            if (dim.param->period > 0.0f && !dim.levels)
+              diff[d] = parameter_difference(decl, *dim.param, matched_packed[dim.param->offset],
+                                             packed[dim.param->offset], packed) /
+                        (dim.param->max - dim.param->min);
+          }
           double sum = 0;
           bool all_exact = true;
           for (size_t d = 0; d < unit.size(); ++d) {
-            sum += std::fabs(matched[d] - unit[d]);
-            if (space.dims()[d].levels && std::fabs(matched[d] - unit[d]) > 1e-6) all_exact = false;
+            sum += diff[d];
+            if (space.dims()[d].levels && diff[d] > 1e-6) all_exact = false;
           }
           const double e = unit.empty() ? 0.0 : sum / unit.size();
           param_errors.push_back(e);
@@ -308,9 +322,32 @@ int main(int argc, char** argv) {
           // The issue's criterion: discrete exact and every continuous one within 2% of its range.
           bool within = all_exact;
           for (size_t d = 0; d < unit.size(); ++d)
-            if (!space.dims()[d].levels && std::fabs(matched[d] - unit[d]) > 0.02) within = false;
+            if (!space.dims()[d].levels && diff[d] > 0.02) within = false;
           det_params_exact += within;
           params_exact = within ? "yes" : "no";
+          // Inert parameters (reported apart, never counted as exact): a continuous parameter more
+          // than 2% off whose target value, put into the match, renders bit for bit the match's
+          // image - the shader does not use it there (grid: the minor lines' width is clamped at
+          // 0.4 of a minor cell, beyond which minor_width changes nothing). No image can tell such
+          // values apart; measured by rendering, whatever the shader.
+          if (all_exact && !within) {
+            const Image as_matched = renderer.render_batch(decl, {matched_packed}, {render_seed}, rs).front();
+            std::string inert;
+            bool all_inert = true;
+            for (size_t d = 0; d < unit.size() && all_inert; ++d) {
+              if (space.dims()[d].levels || diff[d] <= 0.02) continue;
+              const Dimension& dim = space.dims()[d];
+              auto moved = matched_packed;
+              moved[dim.param->offset + dim.channel] = packed[dim.param->offset + dim.channel];
+              const Image other = renderer.render_batch(decl, {moved}, {render_seed}, rs).front();
+              if (other.pixels != as_matched.pixels) all_inert = false;
+              else inert += (inert.empty() ? "" : ", ") + dim.param->name;
+            }
+            if (all_inert) {
+              ++det_params_inert;
+              params_exact = "no (inert: " + inert + ")";
+            }
+          }
         } else {
           exact = params_exact = "no";
         }
@@ -325,7 +362,8 @@ int main(int argc, char** argv) {
         const bool equivalent = params_exact == "yes" ||
                                 (hit && rmse_at(target, matched_image, 0, 0) <= kImageExactRmse);
         det_params_equivalent += equivalent;
-        params_exact += equivalent && params_exact != "yes" ? " (equivalent)" : "";
+        if (params_exact.find("inert") == std::string::npos)
+          params_exact += equivalent && params_exact != "yes" ? " (equivalent)" : "";
       }
       table += fmt::format("| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {} | {} | {:.1f} | {} | {} | {} | {} | {} |\n",
                            i + 1, decl.name, rank, r.spec.shader, r.similarity, ceiling, ratio, repro ? "yes" : "no",
@@ -361,7 +399,7 @@ int main(int argc, char** argv) {
         "noise ceiling) {}, median S / ceiling {:.3f}, median ceiling {:.3f}, target shader among the first 1 / 5 / "
         "12 of the structural scan {} / {} / {}, median S {:.3f}, verdicts good {} / "
         "approximate {} / no-match {}; deterministic targets {}: all discrete parameters exact {}, all parameters "
-        "exact (discrete exact, continuous within 2% of range) {}, or equivalent (the same image unshifted) {}, image exact (RGB RMSE <= {} at the best shift, "
+        "exact (discrete exact, continuous within 2% of range) {} (+ {} whose only misses are inert parameters: the target's value renders the match's image bit for bit), or equivalent (the same image unshifted) {}, image exact (RGB RMSE <= {} at the best shift, "
         "on the overlap) {}, "
         "median parameter error {:.3f} (mean |unit difference|, identified ones); time per match median {:.1f} s, "
         "worst {:.1f} s.\n\n",
@@ -370,7 +408,7 @@ int main(int argc, char** argv) {
         std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 1; }),
         std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 5; }),
         std::count_if(ranks.begin(), ranks.end(), [](double r) { return r <= 12; }), median(sims), good, approximate,
-        targets - good - approximate, det_total, det_exact, det_params_exact, det_params_equivalent, kImageExactRmse, det_image_exact,
+        targets - good - approximate, det_total, det_exact, det_params_exact, det_params_inert, det_params_equivalent, kImageExactRmse, det_image_exact,
         median(param_errors), median(times), worst);
 
     std::string photo_table;
@@ -562,7 +600,7 @@ int main(int argc, char** argv) {
         j["synthetic"] = {{"targets", targets},       {"identified", identified},       {"reproduced", reproduced},
                           {"median_ratio", median(ratios)}, {"median_ceiling", median(ceilings)},
                           {"median_similarity", median(sims)}, {"deterministic", det_total},
-                          {"discrete_exact", det_exact}, {"params_exact", det_params_exact},
+                          {"discrete_exact", det_exact}, {"params_exact", det_params_exact}, {"params_inert", det_params_inert},
                           {"params_equivalent", det_params_equivalent}, {"image_exact", det_image_exact},
                           {"rows", synthetic_rows}};
       if (!real_json.is_null()) j["real"] = real_json;

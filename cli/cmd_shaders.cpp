@@ -38,10 +38,17 @@ std::string format_range(const ParamDecl& p) {
   return fmt::format("[{:.4g}, {:.4g}]", p.min, p.max);
 }
 
+// ", period 360/points" for a parameter with a declared symmetry period (shader.h).
+std::string period_text(const ParamDecl& p) {
+  if (!(p.period > 0.0f)) return "";
+  return fmt::format(", period {:.4g}{}", p.period, p.period_per.empty() ? "" : "/" + p.period_per);
+}
+
 nlohmann::json param_json(const ParamDecl& p) {
   nlohmann::json j = {{"name", p.name}, {"type", to_string(p.type)},
                       {"default", param_to_json(p, p.default_value.data())},
                       {"scale", to_string(p.scale)}, {"searchable", p.searchable}, {"help", p.help}};
+  if (p.period > 0.0f) j["period"] = p.period_per.empty() ? nlohmann::json(p.period) : nlohmann::json(fmt::format("{:.4g}/{}", p.period, p.period_per));
   if (p.type == ParamType::Enum) j["values"] = p.enum_values;
   else if (p.type != ParamType::Bool) j["range"] = {p.min, p.max};
   return j;
@@ -78,7 +85,7 @@ void show(const std::string& name, bool json) {
   std::vector<std::vector<std::string>> rows = {{"parameter", "type", "default", "range", "scale", "search", "help"}};
   for (const auto& p : d.params)
     rows.push_back({p.name, to_string(p.type), format_default(p), format_range(p),
-                    p.discrete() || p.type == ParamType::Color ? "-" : to_string(p.scale),
+                    p.discrete() || p.type == ParamType::Color ? "-" : to_string(p.scale) + period_text(p),
                     p.searchable ? "yes" : "fixed", p.help});
   print_table(rows);
   std::printf("\nexample: proctex render '%s:%s=%s' -o %s.png\n", d.name.c_str(),
@@ -145,7 +152,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) { ... }
 
 - Types: `float`, `int`, `bool`, `color` (linear RGB, range [0, 1] unless given), `enum` (values
   become constants `BOND_RUNNING`, `BOND_STACK`). Flags: `log` (log-scaled search, min > 0),
-  `fixed` (never searched). Every parameter needs a one-line help text.
+  `fixed` (never searched), `period=P` or `period=P/COUNT` (a symmetry: the values v and v + P render
+  the same image, P divided by the int parameter COUNT when given - the star's
+  `rotation ... period=360/points`; the matcher reports the value reduced into [min, min + period)
+  and bench_match_eval compares values modulo the period; tests/shaders checks each declared
+  period by rendering). Every parameter needs a one-line help text.
 - `p` is the texture coordinate (the image height spans 1 unit, y down), `fw` the pixel footprint
   in texture units (filter with it: `pt_filtered_step`, `pt_coverage`, fractal sums take it),
   `seed` the texture's seed (all randomness must come from the `pt_hash*` functions with it).
@@ -197,7 +208,7 @@ void gallery(const GalleryOptions& o, const GlobalOptions& global) {
     md += "| parameter | type | default | range | scale | search | help |\n|---|---|---|---|---|---|---|\n";
     for (const auto& p : d.params)
       md += "| " + p.name + " | " + to_string(p.type) + " | " + format_default(p) + " | " + format_range(p) + " | " +
-            (p.discrete() || p.type == ParamType::Color ? "-" : to_string(p.scale)) + " | " +
+            (p.discrete() || p.type == ParamType::Color ? "-" : to_string(p.scale)) + period_text(p) + " | " +
             (p.searchable ? "yes" : "fixed") + " | " + p.help + " |\n";
   }
   progress.finish();

@@ -18,6 +18,8 @@ namespace {
 // brightness (up to 2x) and clamp to [0, 1], which would bend a white basis; a dark grey stays
 // in the linear range.
 constexpr float kBasisLevel = 0.25f;
+// The least squares' ridge for pixel-exact colours (fit_colours_to_pixels; LinearModel::solve).
+constexpr double kPixelRidge = 1e-12;
 
 // Free colour parameters: searchable and not pinned by --fix.
 std::vector<const ParamDecl*> free_colours(const ShaderDecl& decl, const std::vector<std::string>& pinned) {
@@ -47,10 +49,15 @@ struct LinearModel {
 
   // Least-squares colours that make the model reproduce `wanted` (3 floats per pixel), per channel.
   // `mask` (optional, one byte per pixel): only the pixels where it is non-zero count.
-  // `clamp`: each colour into its declared range (off: the unconstrained optimum, which is smooth
-  // in the shape - the pixel polish's objective).
+  // `bounds` (colour_fit.h ColourBounds): Clamped - each colour clamped into its declared range
+  // after the solve; Unconstrained - the unconstrained optimum; Bounded - the optimum inside the
+  // ranges (a box-constrained least squares, exact: every subset of the colours held at a bound).
+  // `ridge`: added to the normal equations' diagonal, relative to its largest entry (a colour that
+  // shows nowhere stays put). 1e-6 biases a colour that covers few pixels (a small ring's: 1e-4 of
+  // its value, RMS 6e-6 of the whole image - the pixel polish's floor, below which the ring's width
+  // and softness traded freely); fit_colours_to_pixels uses 1e-12.
   std::vector<double> solve(const std::vector<float>& wanted, const std::vector<uint8_t>* mask = nullptr,
-                            bool clamp = true) const {
+                            ColourBounds bounds = ColourBounds::Clamped, double ridge = 1e-6) const {
     const size_t k = weights.size();
     std::vector<double> colours(3 * k, 0.0);
     for (int ch = 0; ch < 3; ++ch) {
@@ -67,11 +74,64 @@ struct LinearModel {
         }
       }
       ata = ata.selfadjointView<Eigen::Upper>();
-      ata.diagonal().array() += 1e-6 * (1.0 + ata.diagonal().maxCoeff());  // a colour that shows nowhere stays put
+      ata.diagonal().array() += ridge * (1.0 + ata.diagonal().maxCoeff());  // a colour that shows nowhere stays put
       const Eigen::VectorXd x = ata.ldlt().solve(atb);
-      for (size_t a = 0; a < k; ++a) colours[3 * a + ch] = clamp ? std::clamp(x[a], lower[3 * a + ch], upper[3 * a + ch]) : x[a];
+      const auto inside = [&](size_t a, double v) { return std::clamp(v, lower[3 * a + ch], upper[3 * a + ch]); };
+      bool out_of_range = false;
+      for (size_t a = 0; a < k; ++a) out_of_range = out_of_range || inside(a, x[a]) != x[a];
+      if (bounds == ColourBounds::Bounded && out_of_range) {
+        const Eigen::VectorXd best = bounded(ata, atb, ch);
+        for (size_t a = 0; a < k; ++a) colours[3 * a + ch] = best[a];
+        continue;
+      }
+      for (size_t a = 0; a < k; ++a) colours[3 * a + ch] = bounds == ColourBounds::Unconstrained ? x[a] : inside(a, x[a]);
     }
     return colours;
+  }
+
+  // min x'Ax - 2b'x over lower <= x <= upper (channel `ch`): the problem is convex, so its optimum
+  // is the best feasible one of the candidates that hold each subset of the colours at one of its
+  // bounds and solve the rest (3^k candidates; k is 1-4 colours).
+  Eigen::VectorXd bounded(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, int ch) const {
+    const size_t k = weights.size();
+    Eigen::VectorXd best = Eigen::VectorXd::Zero(k);
+    double best_value = 1e300;
+    size_t states = 1;
+    for (size_t i = 0; i < k; ++i) states *= 3;
+    for (size_t code = 0; code < states; ++code) {
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(k);
+      std::vector<size_t> free;
+      size_t c = code;
+      for (size_t i = 0; i < k; ++i, c /= 3) {
+        if (c % 3 == 0) free.push_back(i);
+        else x[i] = c % 3 == 1 ? lower[3 * i + ch] : upper[3 * i + ch];
+      }
+      if (!free.empty()) {
+        const size_t f = free.size();
+        Eigen::MatrixXd af(f, f);
+        Eigen::VectorXd bf(f);
+        for (size_t i = 0; i < f; ++i) {
+          bf[i] = b[free[i]];
+          for (size_t j = 0; j < k; ++j)
+            if (std::find(free.begin(), free.end(), j) == free.end()) bf[i] -= a(free[i], j) * x[j];
+          for (size_t j = 0; j < f; ++j) af(i, j) = a(free[i], free[j]);
+        }
+        const Eigen::VectorXd xf = af.ldlt().solve(bf);
+        bool feasible = true;
+        for (size_t i = 0; i < f; ++i) {
+          const size_t at = 3 * free[i] + ch;
+          if (!(xf[i] >= lower[at] - 1e-9 && xf[i] <= upper[at] + 1e-9)) feasible = false;
+          x[free[i]] = std::clamp(xf[i], lower[at], upper[at]);
+        }
+        if (!feasible) continue;
+      }
+      const double value = x.dot(a * x) - 2.0 * b.dot(x);
+      if (value < best_value) {
+        best_value = value;
+        best = x;
+      }
+    }
+    return best;
   }
 };
 
@@ -305,7 +365,7 @@ namespace proctex::search {
 PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                      const std::vector<std::string>& pinned, const std::vector<float>& wanted,
                                      const std::vector<uint8_t>& mask, int side, Renderer& renderer,
-                                     bool clamp_colours, bool zero_offset) {
+                                     ColourBounds bounds, bool zero_offset) {
   const auto colours = free_colours(decl, pinned);
   const size_t k = colours.size();
   // Per colour its grey basis alone, then all free colours black (the offset).
@@ -339,7 +399,7 @@ PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<f
   fit.packed = packed;
   fit.renders = static_cast<long>(batch.size());
   fit.offset_black = std::all_of(model.offset.pixels.begin(), model.offset.pixels.end(), [](float v) { return v == 0.0f; });
-  const auto solved = k ? model.solve(wanted, &mask, clamp_colours) : std::vector<double>{};
+  const auto solved = k ? model.solve(wanted, &mask, bounds, kPixelRidge) : std::vector<double>{};
   for (size_t j = 0; j < k; ++j)
     for (int ch = 0; ch < 3; ++ch)
       fit.packed[colours[j]->offset + ch] =

@@ -62,12 +62,18 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
 // squares on the shader's colour basis (free colours + 1 renders, no histogram, no registration).
 // `mse`: the model's mean squared RGB residual on the mask - exact for a shader linear in its
 // colours (check that with fit_colours' linearity test first). The pixel polish's inner step.
-// `clamp_colours` false: `mse` is that of the unconstrained least-squares colours (smooth in the
-// shape, so a local search is not caught where a colour leaves its range on the way); `packed`
-// always holds colours clamped into their ranges.
+// `bounds`: Clamped - the least-squares colours, each clamped into its range (`mse` theirs);
+// Unconstrained - `mse` is that of the unconstrained least-squares colours (smooth in the shape),
+// `packed` holds them clamped; Bounded - the least squares solved inside the colours' ranges (per
+// channel, every set of colours at a bound tried: the best colours a render can have, and `mse`
+// theirs; continuous in the shape). The pixel polish's objective was Unconstrained (session 9: a
+// clamped colour made the objective kink where the search stalled); with a colour out of range that
+// objective reports an image no render gives - a soft ring whose colour wanted blue 1.2 stopped at
+// RMS 1e-5 by the model and 0.0033 rendered (session 14) - so it is Bounded since.
 // `zero_offset`: the caller knows the render with every free colour black is black (a shader
 // that mixes its colours, as a two-colour pattern does: `offset_black` of an earlier fit of the
 // same shader said so), and that render is skipped - a third of a two-colour fit's renders.
+enum class ColourBounds { Clamped, Unconstrained, Bounded };
 struct PixelColourFit {
   std::vector<float> packed;
   double mse = 1.0;
@@ -77,7 +83,7 @@ struct PixelColourFit {
 PixelColourFit fit_colours_to_pixels(const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed,
                                      const std::vector<std::string>& pinned, const std::vector<float>& wanted,
                                      const std::vector<uint8_t>& mask, int side, Renderer& renderer,
-                                     bool clamp_colours = true, bool zero_offset = false);
+                                     ColourBounds bounds = ColourBounds::Clamped, bool zero_offset = false);
 
 // Renders fit_colours spends for `starts` starting points of `decl`.
 long colour_fit_renders(const ShaderDecl& decl, const std::vector<std::string>& pinned, size_t starts);

@@ -1120,7 +1120,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   if (final_choice) {
     const Candidate& c = *final_choice;
     result.probability = c.from->probability;
-    result.spec = spec_from_packed(*c.from->decl, c.packed, c.from->seed);
+    // One value of each symmetry class (shader.h `period=`: a star turned by 360/n is the same
+    // image), so that equal images give equal answers.
+    result.spec = spec_from_packed(*c.from->decl, canonical_packed(*c.from->decl, c.packed), c.from->seed);
     result.similarity = c.similarity;
     result.polish = c.polish;
     result.image_rmse = c.image_rmse;

@@ -78,7 +78,7 @@ double projected_objective(unsigned n, const double* x, double*, void* data) {
   auto& c = *static_cast<ProjectedContext*>(data);
   if (c.renders >= c.budget) throw nlopt::forced_stop();
   const auto fit = fit_colours_to_pixels(*c.decl, c.shape->to_packed(std::vector<double>(x, x + n)), c.seed, *c.pinned,
-                                         *c.wanted, *c.mask, c.side, *c.renderer, false, c.zero_offset);
+                                         *c.wanted, *c.mask, c.side, *c.renderer, ColourBounds::Bounded, c.zero_offset);
   c.renders += fit.renders;
   // A shader that mixes its colours renders black with them all black, whatever its shape: the
   // offset render is skipped from then on (the polished end point is checked by a render).
@@ -227,7 +227,7 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
   for (const auto& p : decl.params)
     if (p.type == ParamType::Color) shape_pinned.push_back(p.name);
   // Is the colour model exact here? Fit once and compare its residual with a render's.
-  const auto first = fit_colours_to_pixels(decl, packed, seed, pinned, wanted, mask, side, renderer);
+  const auto first = fit_colours_to_pixels(decl, packed, seed, pinned, wanted, mask, side, renderer, ColourBounds::Bounded);
   const double first_rmse = render_rmse(decl, first.packed, seed, pixels, target_features, renderer);
   used += first.renders + 1;
   const bool linear = std::fabs(first_rmse - std::sqrt(first.mse)) <= 1e-4 + 0.01 * first_rmse;

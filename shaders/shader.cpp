@@ -47,7 +47,7 @@ std::vector<std::string> split_list(const std::string& text) {
 
 // Flags and help text that follow the default/range: `log fixed "help"`.
 void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
-  static const std::regex tail_re(R"(^\s*((?:[a-z]+\s+)*)\"(.*)\"\s*$)");
+  static const std::regex tail_re(R"(^\s*((?:[a-z]+(?:=[^\s"]+)?\s+)*)\"(.*)\"\s*$)");
   std::smatch m;
   if (!std::regex_match(tail, m, tail_re)) at.fail("expected flags then a \"quoted help text\"");
   std::stringstream flags(m[1].str());
@@ -57,7 +57,19 @@ void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
     else if (flag == "linear") p.scale = Scale::Linear;
     else if (flag == "fixed") p.searchable = false;
     else if (flag == "search") p.searchable = true;
-    else at.fail("unknown flag '" + flag + "' (known: log, linear, fixed, search)");
+    else if (flag.starts_with("period=")) {
+      // period=P or period=P/COUNT (checked against the other declarations in parse_shader)
+      const std::string expr = flag.substr(7);
+      const auto slash = expr.find('/');
+      p.period = parse_number(expr.substr(0, slash), at, "period");
+      if (slash != std::string::npos) {
+        p.period_per = trim(expr.substr(slash + 1));
+        if (!std::regex_match(p.period_per, std::regex(R"([A-Za-z_]\w*)")))
+          at.fail("period '" + expr + "': expected a number or NUMBER/COUNT_PARAMETER");
+      }
+      if (!(p.period > 0.0f)) at.fail("period of '" + p.name + "' must be positive");
+    } else
+      at.fail("unknown flag '" + flag + "' (known: log, linear, fixed, search, period=P[/COUNT])");
   }
   p.help = m[2].str();
   if (p.help.empty()) at.fail("parameter '" + p.name + "' needs a one-line help text");
@@ -131,6 +143,8 @@ ParamDecl parse_param(const std::string& body, const LineError& at) {
     at.fail("unknown parameter type '" + type + "' (float, int, bool, color, enum)");
   }
   if (p.type != ParamType::Bool) check_range(p, at);
+  if (p.period > 0.0f && (p.type != ParamType::Float || p.scale != Scale::Linear))
+    at.fail("period of '" + p.name + "': only a linear float parameter can be periodic");
   return p;
 }
 
@@ -179,6 +193,38 @@ std::vector<float> ShaderDecl::default_packed() const {
 
 std::string stable_hash(const std::string& text) { return fnv1a_hex(text); }
 
+double symmetry_period(const ShaderDecl& decl, const ParamDecl& p, const std::vector<float>& packed) {
+  if (!(p.period > 0.0f)) return 0.0;
+  if (p.period_per.empty()) return p.period;
+  const ParamDecl* count = decl.find(p.period_per);
+  if (!count || count->offset >= static_cast<int>(packed.size())) return 0.0;
+  const double n = std::round(packed[count->offset]);
+  return n >= 1.0 ? double(p.period) / n : 0.0;
+}
+
+std::vector<float> canonical_packed(const ShaderDecl& decl, std::vector<float> packed) {
+  for (const auto& p : decl.params) {
+    const double period = symmetry_period(decl, p, packed);
+    if (period <= 0.0 || p.offset >= static_cast<int>(packed.size())) continue;
+    float& v = packed[p.offset];
+    double r = std::fmod(double(v) - p.min, period);
+    if (r < 0) r += period;
+    // A value a rounding error below a whole period reads as the period's start.
+    if (period - r < 1e-6 * period) r = 0.0;
+    v = static_cast<float>(std::clamp(p.min + r, double(p.min), double(p.max)));
+  }
+  return packed;
+}
+
+double parameter_difference(const ShaderDecl& decl, const ParamDecl& p, float a, float b,
+                            const std::vector<float>& packed) {
+  const double d = std::fabs(double(a) - double(b));
+  const double period = symmetry_period(decl, p, packed);
+  if (period <= 0.0) return d;
+  const double r = std::fmod(d, period);
+  return std::min(r, period - r);
+}
+
 ShaderDecl parse_shader(const std::string& path, const std::string& source) {
   ShaderDecl decl;
   decl.path = path;
@@ -213,6 +259,14 @@ ShaderDecl parse_shader(const std::string& path, const std::string& source) {
     } else if (std::regex_search(line, m, stray_re)) {
       at.fail("unknown declaration '@" + m[1].str() + "' (known: @shader, @param)");
     }
+  }
+  for (const auto& p : decl.params) {
+    if (p.period_per.empty()) continue;
+    const LineError at{path, p.line};
+    const ParamDecl* count = decl.find(p.period_per);
+    if (!count || count->type != ParamType::Int)
+      at.fail("period of '" + p.name + "' is divided by '" + p.period_per + "', which is not an int parameter here");
+    if (count->min < 1.0f) at.fail("period of '" + p.name + "' is divided by '" + p.period_per + "', whose range includes " + std::to_string(int(count->min)) + " (needs >= 1)");
   }
   if (decl.help.empty())
     throw Error(path + ":1: missing '// @shader \"one-line description\"' line",

@@ -9,7 +9,10 @@
 //   // @param bool  worn   = false fixed               "Chipped brick edges"
 //   float3 shade(float2 p, float fw, uint seed, const Params P) { ... }
 //
-// Flags after the range: `log` (log scale for search; needs min > 0), `fixed` (never searched).
+// Flags after the range: `log` (log scale for search; needs min > 0), `fixed` (never searched),
+// `period=P` or `period=P/COUNT` (a symmetry: v and v + P render the same image; COUNT an int
+// parameter the period is divided by: a star with n points turned by 360/n is the same star):
+//   // @param float rotation = 0 [0, 180] period=360/points "Rotation in degrees"
 // Colours range over [0, 1] per channel unless a range is given.
 #include <optional>
 #include <string>
@@ -33,6 +36,12 @@ struct ParamDecl {
   bool searchable = true;
   std::string help;
   std::vector<std::string> enum_values;
+  // Symmetry (flag `period=P[/COUNT]`, linear floats only): the values v and v + period render
+  // the same image at every seed, so the matcher reports one canonical value and the evaluation
+  // compares values modulo the period. 0: no symmetry declared. `period_per`: the int parameter
+  // the period is divided by ("" for a constant period).
+  float period = 0.0f;
+  std::string period_per;
   int line = 0;    // line of the declaration in the shader file
   int offset = 0;  // first float of this parameter in the packed vector
 
@@ -57,6 +66,19 @@ struct ShaderDecl {
 // Parses the declaration in `source`. Throws proctex::Error naming "path:line" for malformed
 // declarations (bad type, default outside range, duplicate name, missing @shader line, ...).
 ShaderDecl parse_shader(const std::string& path, const std::string& source);
+
+// The symmetry period of `p` at the point `packed` (its `period` divided by the current value of
+// its `period_per` count), or 0 when `p` declares none.
+double symmetry_period(const ShaderDecl& decl, const ParamDecl& p, const std::vector<float>& packed);
+
+// `packed` with every periodic parameter reduced into [min, min + period): the one value of each
+// class of equivalent values that the matcher reports (the same image, by the declaration).
+std::vector<float> canonical_packed(const ShaderDecl& decl, std::vector<float> packed);
+
+// |a - b| for the parameter `p` (packed values), taken modulo its symmetry period at the point
+// `packed` (the shorter way round) when it declares one: how far apart two values are as images.
+double parameter_difference(const ShaderDecl& decl, const ParamDecl& p, float a, float b,
+                            const std::vector<float>& packed);
 
 // FNV-1a 64-bit of a string, as 16 hex digits: stable across runs and platforms.
 std::string stable_hash(const std::string& text);

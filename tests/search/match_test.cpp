@@ -166,6 +166,27 @@ TEST(Match, FourPointedStarIsAStarWithExactlyFourPoints) {
   EXPECT_EQ(r.verdict, "good") << describe(r);
 }
 
+// A star with n points turned by 360/n is the same star (shaders/shape/star.cl declares
+// `rotation ... period=360/points`, session 14): a 12-pointed star at 148.6 degrees is the one at
+// 28.6, 58.6, 88.6 and 118.6. The match reports the canonical value, reduced into [0, 30), within
+// 2% of the range (3.6 degrees) of 28.6; before, it reported whichever period its search ended in
+// (this star, benchmark target 6 of session 14 at 58.6, came back at 118.6; an 8-pointed one at
+// 44.99 at 0.0), and a plain comparison called an exact image wrong.
+TEST(Match, AStarTurnedByItsSymmetryComesBackAsTheCanonicalRotation) {
+  const Image target = render(
+      "star:points=12,size=0.3656,inner=0.2118,rotation=148.62,softness=0.47,fg=(0.3937,0.0877,0.607),"
+      "bg=(0.1555,0.9583,0.8756),seed=9006");
+  const MatchResult r = match_image(target, MatchOptions{});
+  ASSERT_EQ(r.spec.shader, "star") << describe(r);
+  EXPECT_EQ(param(r, "points"), 12) << describe(r);
+  const double rotation = param(r, "rotation").get<double>();
+  EXPECT_GE(rotation, 0.0) << describe(r);
+  EXPECT_LT(rotation, 30.0) << describe(r);
+  const double off = std::fmod(std::fabs(rotation - 28.62), 30.0);  // modulo the period, the shorter way
+  EXPECT_LT(std::min(off, 30.0 - off), 0.02 * 180) << describe(r);
+  EXPECT_LT(r.image_rmse, 0.005) << describe(r);
+}
+
 // Issue 12's exactness: a clean shape comes back with every continuous parameter within 2% of its
 // declared range and its colours within 0.02, so that its render is the target's image (RMS
 // difference under 1% of the colour range). Against the catalogue of 48 samples per shader the

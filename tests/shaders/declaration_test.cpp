@@ -97,7 +97,50 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"// @param enum e = a {a} \"h\"", 3, "at least two"},
                       BadCase{"// @param bool b = maybe \"h\"", 3, "true or false"},
                       BadCase{"// @param float a = abc [0, 2] \"h\"", 3, "as a number"},
-                      BadCase{"// @parma float a = 1 [0, 2] \"h\"", 3, "unknown declaration"}));
+                      BadCase{"// @parma float a = 1 [0, 2] \"h\"", 3, "unknown declaration"},
+                      BadCase{"// @param float a = 1 [0, 2] period=0 \"h\"", 3, "must be positive"},
+                      BadCase{"// @param float a = 1 [1, 2] log period=1 \"h\"", 3, "linear float"},
+                      BadCase{"// @param int a = 1 [0, 2] period=1 \"h\"", 3, "linear float"},
+                      BadCase{"// @param float a = 1 [0, 2] period=360/ok \"h\"", 3, "not an int parameter"},
+                      BadCase{"// @param float a = 1 [0, 2] period=360/nothing \"h\"", 3, "not an int parameter"},
+                      BadCase{"// @param float a = 1 [0, 2] period=x/y \"h\"", 3, "as a number"}));
+
+// A symmetry period is data (issue 12: a star turned by 360/n is the same star): constant or
+// divided by a count, read back per point; values are reduced into [min, min + period) and
+// compared modulo the period.
+TEST(Declaration, PeriodIsReadAndUsedModuloTheCount) {
+  const char* source = R"(// @shader "A test shape"
+// @param int   n   = 5 [1, 12] "Points"
+// @param float rot = 0 [0, 180] period=360/n "Rotation"
+// @param float dir = 0 [0, 180] period=180 "Direction"
+// @param float other = 0 [0, 180] "Not periodic"
+float3 shade(float2 p, float fw, uint seed, const Params P) { return 0; }
+)";
+  const ShaderDecl d = parse_shader("shaders/test/periodic.cl", source);
+  const ParamDecl& rot = d.params[1];
+  EXPECT_FLOAT_EQ(rot.period, 360.0f);
+  EXPECT_EQ(rot.period_per, "n");
+  EXPECT_EQ(d.params[2].period_per, "");
+  EXPECT_EQ(rot.help, "Rotation");
+  std::vector<float> packed = {8, 50, 180, 170};  // n = 8: the period is 45 degrees
+  EXPECT_DOUBLE_EQ(symmetry_period(d, rot, packed), 45.0);
+  EXPECT_DOUBLE_EQ(symmetry_period(d, d.params[2], packed), 180.0);
+  EXPECT_DOUBLE_EQ(symmetry_period(d, d.params[3], packed), 0.0);
+  const auto canonical = canonical_packed(d, packed);
+  EXPECT_FLOAT_EQ(canonical[0], 8.0f);
+  EXPECT_NEAR(canonical[1], 5.0f, 1e-4);   // 50 - 45
+  EXPECT_NEAR(canonical[2], 0.0f, 1e-4);   // 180 is 0 again
+  EXPECT_FLOAT_EQ(canonical[3], 170.0f);  // no period: left alone
+  // 1 and 44 degrees are 2 degrees apart as 8-pointed stars, 43 apart as anything else.
+  EXPECT_NEAR(parameter_difference(d, rot, 1.0f, 44.0f, packed), 2.0, 1e-5);
+  EXPECT_NEAR(parameter_difference(d, rot, 1.0f, 134.0f, packed), 2.0, 1e-5);
+  EXPECT_NEAR(parameter_difference(d, rot, 10.0f, 30.0f, packed), 20.0, 1e-5);
+  EXPECT_NEAR(parameter_difference(d, d.params[3], 1.0f, 179.0f, packed), 178.0, 1e-5);
+  packed[0] = 5;  // 72 degrees: 1 and 44 are 29 apart (44 - 72 = -28), 10 and 30 still 20
+  EXPECT_NEAR(parameter_difference(d, rot, 1.0f, 44.0f, packed), 29.0, 1e-5);
+  EXPECT_NEAR(parameter_difference(d, rot, 10.0f, 30.0f, packed), 20.0, 1e-5);
+  EXPECT_NEAR(canonical_packed(d, packed)[1], 50.0f, 1e-5);
+}
 
 TEST(Declaration, MissingShaderLineIsAnError) {
   EXPECT_THROW(parse_shader("shaders/t/a.cl", "float3 shade(float2 p, float fw, uint seed, const Params P) {}"),
