@@ -443,65 +443,43 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   }
   const ColourTarget colour_target = make_colour_target(target, o.screen_resolution);
   const metrics::Features target_screen = metric.features(colour_target.rgb, o.screen_resolution);
-  // Host threads of the screening, the lanes' colour fits and the race: one per core (one under a
-  // render budget, which is spent in order). Each candidate's screening and each lane are
-  // independent of the others, so the answer does not depend on the count.
-  const int host_threads = o.budget.max_evaluations > 0 ? 1
-                           : o.threads > 0               ? o.threads
-                                                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<Start> screened;
   long evaluations = 0;
-  {
-    // Each candidate's starts, kept in the candidates' order whatever thread screened them: the
-    // race is chosen from `screened` in that order.
-    std::vector<std::optional<std::vector<Start>>> screened_by(chosen.size());
-    std::mutex screen_mutex;
-    size_t screened_so_far = 0;
-    parallel_for(chosen.size(), host_threads, [&](size_t k) {
-      const auto& scan = scans[chosen[k]];
-      const ShaderDecl& decl = library.get(scan.catalogue.shader);
-      std::vector<int> best(scan.similarity.size());
-      for (size_t i = 0; i < best.size(); ++i) best[i] = static_cast<int>(i);
-      const size_t keep = std::min<size_t>(best.size(), std::max(1, o.screen));
-      std::partial_sort(best.begin(), best.begin() + keep, best.end(),
-                        [&](int a, int b) { return scan.similarity[a] > scan.similarity[b]; });
-      std::vector<std::vector<float>> packs;
-      std::vector<uint32_t> seeds;
-      std::vector<std::string> pinned;
-      for (size_t i = 0; i < keep; ++i) {
-        const auto& sample = scan.catalogue.samples[best[i]];
-        packs.push_back(apply_fixed(decl, sample.packed, o.fixed, pinned));
-        seeds.push_back(sample.seed);
-      }
-      const auto fits = fit_colours(decl, packs, seeds, pinned, colour_target, renderer, false);
-      std::vector<Start> starts;
-      for (size_t i = 0; i < keep; ++i) {
-        const double s = metric.similarity(target_screen, metric.features(fits[i].preview, o.screen_resolution));
-        starts.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]],
+  size_t screened_so_far = 0;
+  for (int c : chosen) {
+    const auto& scan = scans[c];
+    const ShaderDecl& decl = library.get(scan.catalogue.shader);
+    std::vector<int> best(scan.similarity.size());
+    for (size_t i = 0; i < best.size(); ++i) best[i] = static_cast<int>(i);
+    const size_t keep = std::min<size_t>(best.size(), std::max(1, o.screen));
+    std::partial_sort(best.begin(), best.begin() + keep, best.end(),
+                      [&](int a, int b) { return scan.similarity[a] > scan.similarity[b]; });
+    std::vector<std::vector<float>> packs;
+    std::vector<uint32_t> seeds;
+    std::vector<std::string> pinned;
+    for (size_t i = 0; i < keep; ++i) {
+      const auto& sample = scan.catalogue.samples[best[i]];
+      packs.push_back(apply_fixed(decl, sample.packed, o.fixed, pinned));
+      seeds.push_back(sample.seed);
+    }
+    const auto fits = fit_colours(decl, packs, seeds, pinned, colour_target, renderer, false);
+    evaluations += colour_fit_renders(decl, pinned, keep);
+    for (size_t i = 0; i < keep; ++i) {
+      const double s = metric.similarity(target_screen, metric.features(fits[i].preview, o.screen_resolution));
+      screened.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]],
                           fits[i].packed, scan.probability});
-      }
-      std::lock_guard lock(screen_mutex);
-      evaluations += colour_fit_renders(decl, pinned, keep);
-      screened_by[k] = std::move(starts);
-      // Live previews (proctex serve): the best screened start so far after each candidate - the
-      // first is the most likely material - so the first preview does not wait for the whole
-      // screening (12 candidates: ~85% of the global search). `best` stays untouched, as below.
-      ++screened_so_far;
-      if (progress && screened_so_far < chosen.size()) {
-        const Start* top = nullptr;
-        for (const auto& done : screened_by)
-          if (done)
-            for (const auto& st : *done)
-              if (!top || st.similarity > top->similarity) top = &st;
-        if (top) {
-          state.best_shader = top->shader;
-          state.best_spec = spec_from_packed(library.get(top->shader), top->packed, top->sample->seed);
-          report("screened " + std::to_string(screened_so_far) + "/" + std::to_string(chosen.size()));
-        }
-      }
-    });
-    for (auto& done : screened_by)
-      for (auto& st : *done) screened.push_back(std::move(st));
+    }
+    // Live previews (proctex serve): the best screened start so far after each candidate - the
+    // first is the most likely material - so the first preview does not wait for the whole
+    // screening (12 candidates: ~85% of the global search). `best` stays untouched, as below.
+    ++screened_so_far;
+    if (progress && screened_so_far < chosen.size() && !screened.empty()) {
+      const auto& top = *std::max_element(screened.begin(), screened.end(),
+                                          [](const Start& a, const Start& b) { return a.similarity < b.similarity; });
+      state.best_shader = top.shader;
+      state.best_spec = spec_from_packed(library.get(top.shader), top.packed, top.sample->seed);
+      report("screened " + std::to_string(screened_so_far) + "/" + std::to_string(chosen.size()));
+    }
   }
   for (int c : chosen) {
     double screen_best = 0.0;
@@ -551,25 +529,18 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   for (auto& st : choose_race(screened, by_selection, o.selection_lanes, by_structure, race)) {
     Lane lane;
     lane.decl = &library.get(st.shader);
+    std::vector<std::string> pinned;
+    apply_fixed(*lane.decl, st.sample->packed, o.fixed, pinned);
+    lane.colours = fit_colours(*lane.decl, {st.packed}, {st.sample->seed}, pinned, colour_target, renderer, true).front();
+    evaluations += colour_fit_renders(*lane.decl, pinned, 1);
+    lane.space = std::make_unique<ParameterSpace>(*lane.decl, lane.colours.packed, pinned);
+    lane.objective = std::make_unique<Objective>(*lane.space, target_coarse, metric, renderer, st.sample->seed,
+                                                 o.coarse_resolution);
+    lane.refined.unit = lane.space->to_unit(lane.colours.packed);
     lane.start = std::move(st);
     lanes.push_back(std::move(lane));
   }
   std::mutex lane_mutex;  // run_lane may run on several threads (the race): guards the shared state
-  // Each lane's colours (polished over its colour basis: host work between a few renders) and its
-  // objective, on the host threads; all before the race, whose lanes count them in their budget.
-  parallel_for(lanes.size(), host_threads, [&](size_t i) {
-    Lane& lane = lanes[i];
-    std::vector<std::string> pinned;
-    apply_fixed(*lane.decl, lane.start.sample->packed, o.fixed, pinned);
-    lane.colours = fit_colours(*lane.decl, {lane.start.packed}, {lane.start.sample->seed}, pinned, colour_target,
-                               renderer, true).front();
-    lane.space = std::make_unique<ParameterSpace>(*lane.decl, lane.colours.packed, pinned);
-    lane.objective = std::make_unique<Objective>(*lane.space, target_coarse, metric, renderer, lane.start.sample->seed,
-                                                 o.coarse_resolution);
-    lane.refined.unit = lane.space->to_unit(lane.colours.packed);
-    std::lock_guard lock(lane_mutex);
-    evaluations += colour_fit_renders(*lane.decl, pinned, 1);
-  });
   // Renders of the lanes still running, so that the reported count only grows while several lanes
   // progress at once (each lane's own count added to the finished lanes' total went back and forth).
   long running_evaluations = 0;
@@ -624,7 +595,10 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // several host threads: one lane computes its features while another's render runs on the
   // device, and the result is the same as one after the other (test Match.ParallelRace*). Not
   // under a render budget (--budget N), which is spent in the lanes' order.
-  parallel_for(lanes.size(), host_threads, [&](size_t i) {
+  const int race_threads = o.budget.max_evaluations > 0 ? 1
+                           : o.threads > 0               ? o.threads
+                                                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  parallel_for(lanes.size(), race_threads, [&](size_t i) {
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
   });
   for (auto& lane : lanes) lane.race_similarity = lane.refined.similarity;

@@ -108,9 +108,8 @@ struct MatchOptions {
   // a statistic the refinement does not optimise) in the final choice on photos:
   // log S + log P - shape_weight x distance. Recorded per finalist whatever the weight.
   double shape_weight = kShapeWeight;
-  // Host threads of the screening, the race lanes' colour fits and the race (candidates and lanes
-  // are independent; the answer does not depend on it). 0: one per core. A render budget
-  // (Budget::max_evaluations) runs them on one thread.
+  // Host threads of the race (its lanes are independent; the answer does not depend on it).
+  // 0: one per core. A render budget (Budget::max_evaluations) runs the race on one thread.
   int threads = 0;
   // Evaluation only: refine every finalist to the end, also those that cannot win the final choice
   // (the answer is the same; the renders are not).
