@@ -326,8 +326,8 @@ TEST(Match, ParallelRaceGivesTheSameResultAsOneThread) {
     EXPECT_EQ(a.starts[i]["refined_similarity_coarse"], b.starts[i]["refined_similarity_coarse"]) << i;
     EXPECT_EQ(a.starts[i]["evaluations"], b.starts[i]["evaluations"]) << i;
   }
-  // The screening runs on the same threads (session 14): the candidates in the selection's order,
-  // each with the same best screened similarity.
+  // And the screening before it: the candidates in the selection's order, each with the same best
+  // screened similarity (it also passed with the screening on the race's threads, session 14).
   ASSERT_EQ(a.candidates.size(), b.candidates.size());
   for (size_t i = 0; i < a.candidates.size(); ++i) {
     EXPECT_EQ(a.candidates[i].shader, b.candidates[i].shader) << i;
