@@ -191,6 +191,13 @@ constexpr long kSettleEvaluations = 80;
 // the rest of its refinement is assumed to raise its full-resolution similarity (measured:
 // docs/performance.md "Match", session 13).
 constexpr double kUnrefinedGain = 1.5;
+// The polish of a finalist whose shader is not deterministic (on a clean pattern) is skipped when
+// its similarity times this could not change the final choice. Not a bound: on 149 such polishes
+// (43 report photos, 53 synthetic and 18 deterministic targets) it raised the 256 px similarity by
+// more for 6, up to 1.91x (the synthetic caustics and bricks targets' own shaders, which the rule
+// still polishes: their selection probability lets them win); a replay of the rule on those runs
+// skipped 102 of 149 polishes and changed no answer (docs/performance.md "Match", session 14).
+constexpr double kPolishGain = 1.1;
 constexpr double kPolishStopRmse = 3e-4;  // a polished finalist this exact ends the other polishes  // the settle's renders (default metric, counts pinned)
 // The align stage (search/align.h; counts and colours pinned): kAlignEvaluations renders.
 constexpr int kAlignMirrorPairDims = 6;  // up to this many dimensions, pairs are mirrored too
@@ -802,6 +809,36 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (final_candidates.back().image_rmse >= 0) result.starts[i]["image_rmse"] = final_candidates.back().image_rmse;
   }
 
+  // The final choice's score of a candidate (used after the polishes, and by the polish's skip rule).
+  const auto pixel_exact = [&](const Candidate& c) { return c.image_rmse >= 0 && c.image_rmse <= exact_limit; };
+  const auto visibly_other = [&](const Candidate& c) {
+    return pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
+  };
+  const auto score_of = [&](const Candidate& c) {
+    return pixel_exact(c) ? 2e6 - c.image_rmse
+           : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
+               ? 1e6 + c.similarity
+               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
+                     (pattern ? 0.0 : o.shape_weight * c.shape_distance);
+  };
+  // Whether the polish of a finalist whose shader is not deterministic could change the final
+  // choice (clean patterns only; the polish of such a shader is the magnitude polish and a colour
+  // fit, never pixel-exact, so its point enters the choice with a similarity S' above the
+  // finalist's and the finalist's P, and no shape term). Assuming S' <= kPolishGain x the
+  // finalist's S, it cannot: be a certain match (S' >= kCertainMatch), beat the best score of the
+  // candidates so far (the final maximum only grows), nor outclass any choice (every candidate
+  // that can be outclassed has S >= the least finalist S).
+  const auto polish_could_matter = [&](const Candidate& c) {
+    const double reach = std::min(1.0, c.similarity * kPolishGain);
+    if (reach >= kCertainMatch) return true;
+    double best = -std::numeric_limits<double>::infinity(), least = c.similarity;
+    for (const auto& other : final_candidates) {
+      best = std::max(best, score_of(other));
+      least = std::min(least, other.similarity);
+    }
+    return decision(reach, c.from->probability, kPatternSelectionShare) > best || reach > kOutclassedRatio * least;
+  };
+
   // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric
   // cannot tell 7 from 8 brick courses or a bond from its alias well; the whole Fourier
   // magnitude can. Once per shader, from the shader's best finalist.
@@ -845,6 +882,14 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     evaluations += 2;
     if (!polish["deterministic"] && !pattern) {
       final_candidates[best_of_shader].polish = polish;
+      continue;
+    }
+    // Most of a clean-pattern photo's polish time went to shaders that are not deterministic and
+    // whose polished point never was the answer (docs/performance.md "Match", session 14).
+    if (!polish["deterministic"] && !o.polish_every_finalist && !polish_could_matter(final_candidates[best_of_shader])) {
+      polish["skipped"] = "cannot change the final choice";
+      final_candidates[best_of_shader].polish = polish;
+      result.starts[best_of_shader]["polish"] = polish;
       continue;
     }
     const ParameterSpace space(*base.decl, packed, pinned);
@@ -1098,17 +1143,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // similarity, that finalist is chosen instead, however likely the selection finds the first
   // one's material: the selection can be sure and wrong (a knit render: P(grass) 0.96, grass S 0.135
   // against knit's 0.599).
-  const auto pixel_exact = [&](const Candidate& c) { return c.image_rmse >= 0 && c.image_rmse <= exact_limit; };
-  const auto visibly_other = [&](const Candidate& c) {
-    return pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
-  };
-  const auto score_of = [&](const Candidate& c) {
-    return pixel_exact(c) ? 2e6 - c.image_rmse
-           : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
-               ? 1e6 + c.similarity
-               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
-                     (pattern ? 0.0 : o.shape_weight * c.shape_distance);
-  };
   const Candidate* final_choice = nullptr;
   const Candidate* most_similar = nullptr;
   for (const auto& c : final_candidates) {

@@ -342,8 +342,17 @@ TEST(Match, ParallelRaceGivesTheSameResultAsOneThread) {
   ASSERT_EQ(a.starts.size(), b.starts.size());
   for (size_t i = 0; i < a.starts.size(); ++i) {
     EXPECT_EQ(a.starts[i]["shader"], b.starts[i]["shader"]) << i;
+    EXPECT_EQ(a.starts[i]["screened_similarity"], b.starts[i]["screened_similarity"]) << i;
+    EXPECT_EQ(a.starts[i]["colour_similarity"], b.starts[i]["colour_similarity"]) << i;
     EXPECT_EQ(a.starts[i]["refined_similarity_coarse"], b.starts[i]["refined_similarity_coarse"]) << i;
     EXPECT_EQ(a.starts[i]["evaluations"], b.starts[i]["evaluations"]) << i;
+  }
+  // And the screening before it: the candidates in the selection's order, each with the same best
+  // screened similarity (it also passed with the screening on the race's threads, session 14).
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (size_t i = 0; i < a.candidates.size(); ++i) {
+    EXPECT_EQ(a.candidates[i].shader, b.candidates[i].shader) << i;
+    EXPECT_EQ(a.candidates[i].screened, b.candidates[i].screened) << i;
   }
 }
 
@@ -391,6 +400,36 @@ TEST(Match, FinalistsThatCannotWinAreNotRefinedAndTheAnswerStays) {
   EXPECT_GE(unrefined, 1) << describe(some);
   EXPECT_LT(some.evaluations, all.evaluations);
   for (const auto& s : all.starts) EXPECT_TRUE(s.value("refined", true)) << s.dump();
+}
+
+// On a clean pattern, the exact polish of a finalist whose shader is not deterministic is skipped
+// when its point could not change the final choice (kPolishGain in match.cpp; session 14: most
+// of a clean-pattern photo's polish time went to such finalists, never the answer). The answer is
+// the one of polishing every finalist, for fewer renders; deterministic finalists are polished.
+TEST(Match, PolishesThatCannotChangeTheChoiceAreSkippedAndTheAnswerStays) {
+  // The default clouds' few big blobs: a clean pattern by its spectrum, from a seed-driven shader.
+  const Image target = render("clouds:seed=9023");
+  MatchOptions every = quick(), lazy = quick();
+  every.polish_every_finalist = true;
+  const MatchResult all = match_image(target, every), some = match_image(target, lazy);
+  ASSERT_TRUE(some.pattern) << describe(some);
+  EXPECT_EQ(some.spec.to_json(), all.spec.to_json()) << describe(some);
+  EXPECT_EQ(some.similarity, all.similarity);
+  int skipped = 0;
+  for (const auto& s : some.starts) {
+    if (!s.contains("polish") || !s["polish"].contains("skipped")) continue;
+    if (s["polish"]["skipped"] != "cannot change the final choice") continue;
+    ++skipped;
+    EXPECT_EQ(s["polish"]["deterministic"], false) << s.dump();
+    EXPECT_LT(s["refined_similarity"].get<double>(), kCertainMatch) << s.dump();
+  }
+  EXPECT_GE(skipped, 1) << describe(some);
+  EXPECT_LT(some.evaluations, all.evaluations);
+  for (const auto& s : all.starts) {
+    const bool skipped_in_all = s.contains("polish") && s["polish"].contains("skipped") &&
+                                s["polish"]["skipped"] == "cannot change the final choice";
+    EXPECT_FALSE(skipped_in_all) << s.dump();
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
