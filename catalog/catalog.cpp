@@ -92,6 +92,18 @@ nlohmann::json BuildReport::to_json() const {
   return j;
 }
 
+std::optional<CatalogueSettings> catalogue_settings(const std::filesystem::path& db) {
+  if (!std::filesystem::exists(db)) return std::nullopt;
+  Store store(db, Store::Access::Read);
+  std::optional<CatalogueSettings> found;
+  for (const ShaderSummary& s : store.shaders()) {
+    CatalogueSettings c{SamplingSettings::from_json(s.settings), s.seed};
+    if (!found) found = c;
+    else if (found->settings.hash(found->seed) != c.settings.hash(c.seed)) return std::nullopt;
+  }
+  return found;
+}
+
 BuildReport build(const BuildOptions& o, const std::function<void(const BuildEvent&)>& progress,
                   const ShaderLibrary& library) {
   const auto t0 = Clock::now();
@@ -433,15 +445,22 @@ MergeReport merge(const fs::path& out, const std::vector<fs::path>& inputs, cons
 }
 
 void require_current_sources(Store& store, const ShaderLibrary& library) {
-  std::string changed;
+  std::string changed, list;
   for (const auto& s : store.shaders()) {
     const ShaderDecl* decl = library.find(s.name);
-    if (decl && decl->source_hash != s.source_hash) changed += (changed.empty() ? "" : ", ") + s.name;
+    if (decl && decl->source_hash != s.source_hash) {
+      changed += (changed.empty() ? "" : ", ") + s.name;
+      list += (list.empty() ? "" : ",") + s.name;
+    }
   }
+  // The command names the shaders: without --shaders a build also adds every library shader the
+  // catalogue lacks. It keeps the catalogue's settings (cli/cmd_catalog.cpp), so the rebuilt
+  // shaders get as many samples as the others.
   if (!changed.empty())
     throw Error("catalogue '" + store.path().string() + "' is stale: the source of " + changed +
                     " changed since it was built",
-                "rebuild the changed shaders (the others are kept): proctex catalog build --db " + store.path().string());
+                "rebuild just those (the others are kept): proctex catalog build --db '" + store.path().string() +
+                    "' --shaders " + list);
 }
 
 nlohmann::json info(const fs::path& db, const ShaderLibrary& library) {

@@ -88,6 +88,16 @@ struct BuildReport {
   nlohmann::json to_json() const;
 };
 
+// The sampling settings and seed an existing catalogue was built with, when every shader in it
+// agrees on them: what a refresh (`catalog build` without settings options) keeps, so that
+// rebuilding the shaders whose source changed does not silently resample the others with the
+// defaults. None for a missing or empty file or when the shaders disagree.
+struct CatalogueSettings {
+  SamplingSettings settings;
+  uint64_t seed = 1;
+};
+std::optional<CatalogueSettings> catalogue_settings(const std::filesystem::path& db);
+
 BuildReport build(const BuildOptions& options, const std::function<void(const BuildEvent&)>& progress = {},
                   const ShaderLibrary& library = ShaderLibrary::builtin());
 

@@ -37,21 +37,36 @@ struct BuildCli {
   uint64_t seed = 1;
   std::vector<std::string> set;
   bool force = false, json = false;
+  // Which sampling options the command line gave: only those change an existing catalogue.
+  bool samples_given = false, seed_given = false, mode_given = false, resolution_given = false;
 };
 
 void run_build(const BuildCli& c, const GlobalOptions& global) {
   catalog::BuildOptions o;
   o.db = db_or_default(c.db);
-  o.seed = c.seed;
   o.jobs = c.jobs;
   o.force = c.force;
   o.shard = catalog::Shard::parse(c.shard);
   o.costs = c.costs;
-  o.settings.samples = c.samples;
-  o.settings.mode = c.mode;
-  o.settings.resolution = c.resolution;
-  if (c.resolution < o.settings.screen_resolution) o.settings.screen_resolution = c.resolution;
+  // A refresh keeps the catalogue's own settings (a 48-sample catalogue stays one when a changed
+  // shader is rebuilt); the options given on the command line change them.
+  const auto existing = catalog::catalogue_settings(o.db);
+  if (existing) {
+    o.settings = existing->settings;
+    o.seed = existing->seed;
+  }
+  if (!existing || c.seed_given) o.seed = c.seed;
+  if (!existing || c.samples_given) o.settings.samples = c.samples;
+  if (!existing || c.mode_given) o.settings.mode = c.mode;
+  if (!existing || c.resolution_given) {
+    o.settings.resolution = c.resolution;
+    if (c.resolution < o.settings.screen_resolution) o.settings.screen_resolution = c.resolution;
+  }
   if (c.probes >= 0) o.settings.probes = c.probes;
+  if (existing && !global.quiet)
+    std::fprintf(stderr, "%s: keeping its settings (%d samples, seed %llu, %s, %d probes) except those given\n",
+                 o.db.string().c_str(), o.settings.samples, static_cast<unsigned long long>(o.seed),
+                 o.settings.mode.c_str(), o.settings.probes);
   for (const auto& kv : c.set) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw UsageError("--set needs key=value, got '" + kv + "'", "e.g. --set omega=0.9");
@@ -99,7 +114,8 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
   CLI::App* build = cat->add_subcommand(
       "build",
       "Build or refresh the catalogue. Incremental: a shader whose source, settings and seed are unchanged is\n"
-      "skipped. Each shader is written in one transaction, so a killed build loses at most the shader in\n"
+      "skipped; an existing catalogue keeps its own settings (samples, seed, mode, resolution, probes) unless\n"
+      "options change them. Each shader is written in one transaction, so a killed build loses at most the shader in\n"
       "progress; rerun to continue. --shard i/n builds every n-th shader (sorted by name) for CI jobs;\n"
       "'proctex catalog merge' joins the shard files.");
   build->add_option("--db", b->db, db_help());
@@ -119,7 +135,13 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
       ->take_all();
   build->add_flag("--force", b->force, "rebuild shaders even when unchanged");
   build->add_flag("--json", b->json, "machine-readable report on stdout");
-  build->callback([b, &global] { run_build(*b, global); });
+  build->callback([b, build, &global] {
+    b->samples_given = build->count("--samples") > 0;
+    b->seed_given = build->count("--seed") > 0;
+    b->mode_given = build->count("--mode") > 0;
+    b->resolution_given = build->count("--resolution") > 0;
+    run_build(*b, global);
+  });
 
   // merge
   auto merge_args = std::make_shared<std::vector<std::string>>();

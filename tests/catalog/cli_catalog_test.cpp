@@ -215,17 +215,35 @@ TEST_F(CatalogCli, EditedShaderIsRebuiltAloneAndMatchRefusesTheStaleCatalogue) {
   EXPECT_NE(err.find("mine_bands"), std::string::npos) << err;
   EXPECT_EQ(err.find("checker"), std::string::npos) << err;  // unchanged shaders are not blamed
 
-  ASSERT_EQ(std::system((build + " --json >" + path("build.json") + " 2>/dev/null").c_str()), 0);
+  // The command the error suggests, as the user would paste it: it rebuilds the edited shader
+  // alone, with the catalogue's own settings (not the defaults: 200 samples at 256 px, seed 1).
+  const std::string hint = err.substr(std::min(err.find("proctex catalog build"), err.size()));
+  ASSERT_FALSE(hint.empty()) << err;
+  const std::string suggested = bin + hint.substr(std::string("proctex").size(), hint.find_last_not_of("\n)") - 6);
+  ASSERT_EQ(std::system((suggested + " --json >" + path("build.json") + " 2>/dev/null").c_str()), 0) << suggested;
   const auto report = nlohmann::json::parse(testing::read_text(path("build.json")));
   std::map<std::string, std::string> status;
   for (const auto& s : report["shaders"]) status[s["shader"]] = s["status"];
   EXPECT_EQ(status["mine_bands"], "rebuilt") << report.dump();
-  EXPECT_EQ(status["checker"], "skipped") << report.dump();
+  EXPECT_EQ(report["shaders"].size(), 1u) << report.dump();  // no library shader added
   const int info = std::system((bin + " catalog info --db " + path("cat.sqlite") + " --json >" + path("info.json") +
                                 " 2>/dev/null").c_str());
   ASSERT_EQ(WEXITSTATUS(info), 0);
-  for (const auto& s : nlohmann::json::parse(testing::read_text(path("info.json")))["shaders"])
+  const auto shaders = nlohmann::json::parse(testing::read_text(path("info.json")))["shaders"];
+  ASSERT_EQ(shaders.size(), 2u) << shaders.dump();
+  for (const auto& s : shaders) {
     EXPECT_FALSE(s["stale"].get<bool>()) << s.dump();
+    EXPECT_EQ(s["resolution"], 64) << s.dump();
+    EXPECT_EQ(s["seed"], 3) << s.dump();
+  }
+  // A second refresh changes nothing; an option given explicitly does.
+  ASSERT_EQ(std::system((build + " --json >" + path("again.json") + " 2>/dev/null").c_str()), 0);
+  for (const auto& s : nlohmann::json::parse(testing::read_text(path("again.json")))["shaders"])
+    EXPECT_EQ(s["status"], "skipped") << s.dump();
+  ASSERT_EQ(std::system((bin + " catalog build --db " + path("cat.sqlite") + " --shaders checker --seed 4 --json >" +
+                         path("seed.json") + " 2>/dev/null").c_str()), 0);
+  const auto reseeded = nlohmann::json::parse(testing::read_text(path("seed.json")));
+  EXPECT_EQ(reseeded["shaders"][0]["reason"], "settings or seed changed") << reseeded.dump();
 }
 
 }  // namespace
