@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
   std::string db, photos, pictures, markdown, only, real, split = "tune", real_images = "build/realset/images", json_out,
       override_file;
   int targets = -1, starts = -1, candidates = -1, screen_resolution = -1, race = -1, threads = 0;
-  bool refine_every = false, polish_every = false;
+  bool refine_every = false, polish_every = false, race_every = false;
   long evaluations = -1;
   uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
                 "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
                 "[--screen-resolution R] [--race R] [--real LABELS [--split tune|report|all] [--real-images DIR]] "
-                "[--json FILE] [--selection-override FILE] [--threads T] [--refine-every-finalist 1] [--polish-every-finalist 1]\n"
+                "[--json FILE] [--selection-override FILE] [--threads T] [--refine-every-finalist 1] [--polish-every-finalist 1] [--race-every-lane 1]\n"
                 "  --targets N      synthetic targets (default 53, or 0 with --real)\n"
                 "  --real LABELS    labelled real-texture set (bench/realset/labels.json; build the images with\n"
                 "                   python3 bench/realset/build.py): category / top-3 accuracy, wrong-but-good share\n"
@@ -172,7 +172,9 @@ int main(int argc, char** argv) {
                 "                   refine the finalists that cannot win too (as before session 13: same answers)\n"
                 "  --polish-every-finalist 1\n"
                 "                   on clean patterns, also polish the finalists whose polish cannot change the choice\n"
-                "                   (shaders that are not deterministic; as before session 14)");
+                "                   (shaders that are not deterministic; as before session 14)\n"
+                "  --race-every-lane 1\n"
+                "                   race every lane, also on photos those that cannot be chosen (as before session 16)");
       return 0;
     }
     if (i + 1 >= argc) {
@@ -200,6 +202,7 @@ int main(int argc, char** argv) {
     else if (a == "--threads") threads = std::stoi(v);
     else if (a == "--refine-every-finalist") refine_every = v == "1" || v == "yes";
     else if (a == "--polish-every-finalist") polish_every = v == "1" || v == "yes";
+    else if (a == "--race-every-lane") race_every = v == "1" || v == "yes";
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -237,6 +240,7 @@ int main(int argc, char** argv) {
     options.threads = threads;
     options.refine_every_finalist = refine_every;
     options.polish_every_finalist = polish_every;
+    options.race_every_lane = race_every;
     if (!pictures.empty()) fs::create_directories(pictures);
     Renderer renderer(lib);
     Random rng{seed};

@@ -198,6 +198,17 @@ constexpr double kUnrefinedGain = 1.5;
 // still polishes: their selection probability lets them win); a replay of the rule on those runs
 // skipped 102 of 149 polishes and changed no answer (docs/performance.md "Match", session 14).
 constexpr double kPolishGain = 1.1;
+// The race on a target that is not a clean pattern (stage 3): lanes race kRaceWave at a time in
+// the selection's order; it ends when the next lane's best possible score (S = 1) is
+// kUnracedMargin below the leader's race score - the leader's full-resolution score after its
+// refinement ended up to 0.41 lower on the report photos and the synthetic targets (coarse vs
+// 256 px similarity) - and the remaining lanes' screened similarity times kUnracedReach stays
+// below kOutclassedRatio times the leader's race similarity: a finalist's 256 px similarity was
+// at most 1.3 times its screened one on 95 % of the report photos' finalists, and the leader's
+// 256 px similarity at least 0.7 times its race similarity (1.3 / 0.7).
+constexpr size_t kRaceWave = 2;
+constexpr double kUnracedMargin = 0.5;
+constexpr double kUnracedReach = 1.85;
 constexpr double kPolishStopRmse = 3e-4;  // a polished finalist this exact ends the other polishes  // the settle's renders (default metric, counts pinned)
 // The align stage (search/align.h; counts and colours pinned): kAlignEvaluations renders.
 constexpr int kAlignMirrorPairDims = 6;  // up to this many dimensions, pairs are mirrored too
@@ -514,6 +525,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     std::unique_ptr<Objective> objective;
     RefineResult refined;
     double race_similarity = 0.0;  // coarse, at the end of the race
+    bool raced = false;            // false: it could not be chosen, so it was not raced (see below)
   };
   const int race = std::max(o.starts, o.race);
   std::vector<Lane> lanes;
@@ -529,18 +541,24 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   for (auto& st : choose_race(screened, by_selection, o.selection_lanes, by_structure, race)) {
     Lane lane;
     lane.decl = &library.get(st.shader);
-    std::vector<std::string> pinned;
-    apply_fixed(*lane.decl, st.sample->packed, o.fixed, pinned);
-    lane.colours = fit_colours(*lane.decl, {st.packed}, {st.sample->seed}, pinned, colour_target, renderer, true).front();
-    evaluations += colour_fit_renders(*lane.decl, pinned, 1);
-    lane.space = std::make_unique<ParameterSpace>(*lane.decl, lane.colours.packed, pinned);
-    lane.objective = std::make_unique<Objective>(*lane.space, target_coarse, metric, renderer, st.sample->seed,
-                                                 o.coarse_resolution);
-    lane.refined.unit = lane.space->to_unit(lane.colours.packed);
     lane.start = std::move(st);
     lanes.push_back(std::move(lane));
   }
   std::mutex lane_mutex;  // run_lane may run on several threads (the race): guards the shared state
+  // A lane's colours are fitted when it is first raced (on the race's threads; a lane that is not
+  // raced costs nothing).
+  auto prepare_lane = [&](Lane& lane) {
+    const Start& st = lane.start;
+    std::vector<std::string> pinned;
+    apply_fixed(*lane.decl, st.sample->packed, o.fixed, pinned);
+    lane.colours = fit_colours(*lane.decl, {st.packed}, {st.sample->seed}, pinned, colour_target, renderer, true).front();
+    lane.space = std::make_unique<ParameterSpace>(*lane.decl, lane.colours.packed, pinned);
+    lane.objective = std::make_unique<Objective>(*lane.space, target_coarse, metric, renderer, st.sample->seed,
+                                                 o.coarse_resolution);
+    lane.refined.unit = lane.space->to_unit(lane.colours.packed);
+    std::lock_guard lock(lane_mutex);
+    evaluations += colour_fit_renders(*lane.decl, pinned, 1);
+  };
   // Renders of the lanes still running, so that the reported count only grows while several lanes
   // progress at once (each lane's own count added to the finished lanes' total went back and forth).
   long running_evaluations = 0;
@@ -598,16 +616,53 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const int race_threads = o.budget.max_evaluations > 0 ? 1
                            : o.threads > 0               ? o.threads
                                                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  parallel_for(lanes.size(), race_threads, [&](size_t i) {
-    run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
-  });
-  for (auto& lane : lanes) lane.race_similarity = lane.refined.similarity;
   // The final choice weighs the similarity with the selection's probability of the shader: a
   // flexible shader that tunes itself into a look-alike must also be a likely material.
   // `share`: the part of selection_weight the selection gets (less on clean patterns, below).
   auto decision = [&](double similarity, double probability, double share = 1.0) {
     return std::log(std::max(similarity, 1e-9)) + share * o.selection_weight * std::log(std::max(probability, 1e-9));
   };
+  // Peakiness on the 64 px magnitude (its threshold was set there); the polish compares magnitudes
+  // at the refinement's whole resolution, where fine patterns (44 stripes) do not alias.
+  static const metrics::MagnitudeMetric peak_magnitude;
+  const double peakiness = spectral_peakiness(peak_magnitude.features(target, o.coarse_resolution));
+  const bool pattern = peakiness >= kPatternPeakiness;
+  auto race_lane = [&](size_t i) {
+    prepare_lane(lanes[i]);
+    run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
+    lanes[i].raced = true;
+  };
+  if (pattern || o.race_every_lane) {
+    parallel_for(lanes.size(), race_threads, race_lane);
+  } else {
+    // On a photo most lanes cannot be chosen: the final choice maximises log S + lambda log P, and
+    // a lane whose lambda log P is below the best race lane's score (by kUnracedMargin) would lose
+    // even at S = 1. The lanes race in the selection's order, kRaceWave at a time (whatever the
+    // threads: the same lanes race on any machine), and the race ends when the next lane is such a
+    // lane and cannot outclass the leader either (its screened similarity times kUnracedReach
+    // below kOutclassedRatio times the leader's). Measured on the report photos and the synthetic
+    // targets: docs/performance.md "Match", session 16.
+    std::vector<size_t> order(lanes.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return lanes[a].start.probability > lanes[b].start.probability; });
+    double leader = -std::numeric_limits<double>::infinity(), leader_similarity = 0.0;
+    for (size_t next = 0; next < order.size(); next += kRaceWave) {
+      const size_t end = std::min(order.size(), next + kRaceWave);
+      double reach = 0.0;
+      for (size_t j = next; j < order.size(); ++j) reach = std::max(reach, lanes[order[j]].start.similarity);
+      if (next > 0 && decision(1.0, lanes[order[next]].start.probability) <= leader - kUnracedMargin &&
+          reach * kUnracedReach <= kOutclassedRatio * leader_similarity)
+        break;
+      parallel_for(end - next, std::min<int>(race_threads, kRaceWave), [&](size_t k) { race_lane(order[next + k]); });
+      for (size_t j = next; j < end; ++j) {
+        const Lane& lane = lanes[order[j]];
+        const double d = decision(lane.refined.similarity, lane.start.probability);
+        if (d > leader) leader = d, leader_similarity = lane.refined.similarity;
+      }
+    }
+  }
+  for (auto& lane : lanes) lane.race_similarity = lane.refined.similarity;
   // Finalists: the best `starts` lanes by similarity and selection together, and the best `starts`
   // lanes by the similarity the race reached alone (fewer when they coincide). Either order alone
   // lost a right answer (measured): by the race's similarity the gravel photo's gravel lane lost to
@@ -615,11 +670,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // came third after two circles. The picked lanes lead `lanes`, in similarity order.
   std::stable_sort(lanes.begin(), lanes.end(),
                    [](const Lane& a, const Lane& b) { return a.refined.similarity > b.refined.similarity; });
-  // Peakiness on the 64 px magnitude (its threshold was set there); the polish compares magnitudes
-  // at the refinement's whole resolution, where fine patterns (44 stripes) do not alias.
-  static const metrics::MagnitudeMetric peak_magnitude;
-  const double peakiness = spectral_peakiness(peak_magnitude.features(target, o.coarse_resolution));
-  const bool pattern = peakiness >= kPatternPeakiness;
   size_t finalists = 0;
   {
     const size_t k = std::min<size_t>(lanes.size(), std::max(1, o.starts));
@@ -644,6 +694,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     };
     first_per_shader(by_similarity);
     first_per_shader(by_decision);
+    for (auto* order : {&by_similarity, &by_decision})
+      std::erase_if(*order, [&](size_t i) { return !lanes[i].raced; });
     std::vector<bool> pick(lanes.size(), false);
     for (size_t i = 0; i < std::min(k, by_similarity.size()); ++i) pick[by_similarity[i]] = true;
     for (size_t i = 0; i < std::min(k, by_decision.size()); ++i) pick[by_decision[i]] = true;
@@ -755,8 +807,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
                              {"refined_similarity_coarse", lane.refined.similarity},
                              {"race_similarity_coarse", lane.race_similarity},
                              {"finalist", i < finalists},
-                             {"evaluations", lane.objective->evaluations()}});
+                             {"evaluations", lane.objective ? lane.objective->evaluations() : 0}});
     if (i < finalists && unrefined[i]) result.starts.back()["refined"] = false;  // cannot win: see above
+    if (!lane.raced) result.starts.back()["raced"] = false;  // could not be chosen: see the race
   }
   result.timings["local"] = seconds_since(t_local);
 
@@ -844,7 +897,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // magnitude can. Once per shader, from the shader's best finalist.
   const auto t_polish = Clock::now();
   std::vector<std::pair<const ShaderDecl*, std::vector<float>>> lane_ends;  // every race lane's end point
-  for (const auto& lane : lanes) lane_ends.push_back({lane.decl, lane.space->to_packed(lane.refined.unit)});
+  for (const auto& lane : lanes)
+    if (lane.raced) lane_ends.push_back({lane.decl, lane.space->to_packed(lane.refined.unit)});
   const size_t finalist_count = final_candidates.size();
   std::set<const ShaderDecl*> polished_shaders;
   // Once a polished shader reproduces the target pixel for pixel, the other finalists' polishes

@@ -114,6 +114,9 @@ struct MatchOptions {
   // Evaluation only: refine every finalist to the end, also those that cannot win the final choice
   // (the answer is the same; the renders are not).
   bool refine_every_finalist = false;
+  // Evaluation only: race every lane, also on a photo those that cannot be chosen (stage 3 in
+  // match.cpp: kUnracedMargin).
+  bool race_every_lane = false;
   // Evaluation only: on a clean pattern, polish every finalist shader, also those whose shader is
   // not deterministic and whose polish cannot change the final choice (kPolishGain in match.cpp).
   bool polish_every_finalist = false;

@@ -8,6 +8,8 @@
 // 24 samples each, built once per build tree under a lock (tests/support/catalogue.h).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -57,6 +59,36 @@ TEST(PhotoMatch, GrassPhotoIsGrass) { expect_material("grass.png", {"grass"}); }
 // shape statistics and the lawn grass shader (selection v6) gravel leads (0.61 against grass 0.09).
 TEST(PhotoMatch, GravelPhotoIsGravelOrStones) { expect_material("gravel.png", {"gravel", "stones"}, 300); }
 TEST(PhotoMatch, HubblePhotoIsAStarfield) { expect_material("hubble_deep_field.jpg", {"starfield"}); }
+
+// On a photo most race lanes cannot be chosen: their selection probability is so far below the
+// race leader's that they would lose even at similarity 1 (match.cpp, stage 3). Those lanes are
+// not raced - no renders, not finalists - and the answer is the one of racing all twelve, for
+// fewer renders; the lazy race on two threads, the full one on one.
+TEST(PhotoMatch, LanesThatCannotBeChosenAreNotRacedAndTheAnswerStays) {
+  const Image photo = prepare_target(fs::path(PROCTEX_SHARED_DIR) / "textures" / "brick.png", "");
+  catalog::Store store(photo_catalogue(), catalog::Store::Access::Read);
+  MatchOptions every, lazy;
+  every.refine.max_evaluations = lazy.refine.max_evaluations = 150;
+  every.race_every_lane = true;
+  every.threads = 1;
+  lazy.threads = 2;
+  const MatchResult all = match(photo, store, every), some = match(photo, store, lazy);
+  ASSERT_FALSE(some.pattern);
+  EXPECT_EQ(some.spec.to_json(), all.spec.to_json()) << some.to_json().dump();
+  EXPECT_EQ(some.similarity, all.similarity);
+  int unraced = 0;
+  const double chosen = std::log(some.similarity) + kSelectionWeight * std::log(some.probability);
+  for (const auto& s : some.starts) {
+    if (s.value("raced", true)) continue;
+    ++unraced;
+    EXPECT_EQ(s["evaluations"], 0) << s.dump();
+    EXPECT_FALSE(s["finalist"].get<bool>()) << s.dump();
+    EXPECT_LT(kSelectionWeight * std::log(std::max(s["selection_probability"].get<double>(), 1e-9)), chosen) << s.dump();
+  }
+  EXPECT_GE(unraced, 4) << some.to_json().dump();
+  EXPECT_LT(some.evaluations, all.evaluations);
+  for (const auto& s : all.starts) EXPECT_TRUE(s.value("raced", true)) << s.dump();
+}
 
 }  // namespace
 }  // namespace proctex::search
