@@ -204,7 +204,8 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--screen", o->screen, "Best catalogue samples per shader whose colours are fitted and scored")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--screen-resolution", o->screen_resolution, "Resolution of the screening renders (smaller is faster but loses thin structure)")->capture_default_str()->check(CLI::Range(64, 1024));
   cmd->add_option("--threshold", o->threshold, "Also screen every shader whose selection probability (the evidence for its material) reaches this")->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--race", o->race, "Starting points given a short refinement")->capture_default_str()->check(CLI::Range(1, 256));
+  cmd->add_option("--race", o->race, "Starting points given a short refinement (on a photo, those whose material is too unlikely\n"
+                  "to be chosen even at a perfect similarity are left out: JSON \"raced\": false)")->capture_default_str()->check(CLI::Range(1, 256));
   cmd->add_option("--starts", o->starts, "Best of those refined to the end")->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--optimizer", o->optimizer, "neldermead, subplex, bobyqa, global or gradient")->capture_default_str();
   cmd->add_option("--evaluations", o->max_evaluations, "Renders per starting point refined to the end (race lanes get 1/5). 200 is a quarter faster on photos, the same\n"
