@@ -526,7 +526,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     std::unique_ptr<Objective> objective;
     RefineResult refined;
     double race_similarity = 0.0;  // coarse, at the end of the race
-    bool raced = false;            // false: it could not be chosen, so it was not raced (see below)
+    // Prepared (colours fitted, objective made) when first raced; a lane that could not be chosen never is.
+    bool raced() const { return objective != nullptr; }
   };
   const int race = std::max(o.starts, o.race);
   std::vector<Lane> lanes;
@@ -631,7 +632,6 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   auto race_lane = [&](size_t i) {
     prepare_lane(lanes[i]);
     run_lane(lanes[i], short_run, "race " + std::to_string(i + 1) + "/" + std::to_string(lanes.size()));
-    lanes[i].raced = true;
   };
   if (pattern || o.race_every_lane) {
     parallel_for(lanes.size(), race_threads, race_lane);
@@ -704,7 +704,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     first_per_shader(by_similarity);
     first_per_shader(by_decision);
     for (auto* order : {&by_similarity, &by_decision})
-      std::erase_if(*order, [&](size_t i) { return !lanes[i].raced; });
+      std::erase_if(*order, [&](size_t i) { return !lanes[i].raced(); });
     std::vector<bool> pick(lanes.size(), false);
     for (size_t i = 0; i < std::min(k, by_similarity.size()); ++i) pick[by_similarity[i]] = true;
     for (size_t i = 0; i < std::min(k, by_decision.size()); ++i) pick[by_decision[i]] = true;
@@ -816,9 +816,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
                              {"refined_similarity_coarse", lane.refined.similarity},
                              {"race_similarity_coarse", lane.race_similarity},
                              {"finalist", i < finalists},
-                             {"evaluations", lane.objective ? lane.objective->evaluations() : 0}});
+                             {"evaluations", lane.raced() ? lane.objective->evaluations() : 0}});
     if (i < finalists && unrefined[i]) result.starts.back()["refined"] = false;  // cannot win: see above
-    if (!lane.raced) result.starts.back()["raced"] = false;  // could not be chosen: see the race
+    if (!lane.raced()) result.starts.back()["raced"] = false;  // could not be chosen: see the race
   }
   result.timings["local"] = seconds_since(t_local);
 
@@ -907,7 +907,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const auto t_polish = Clock::now();
   std::vector<std::pair<const ShaderDecl*, std::vector<float>>> lane_ends;  // every race lane's end point
   for (const auto& lane : lanes)
-    if (lane.raced) lane_ends.push_back({lane.decl, lane.space->to_packed(lane.refined.unit)});
+    if (lane.raced()) lane_ends.push_back({lane.decl, lane.space->to_packed(lane.refined.unit)});
   const size_t finalist_count = final_candidates.size();
   std::set<const ShaderDecl*> polished_shaders;
   // Once a polished shader reproduces the target pixel for pixel, the other finalists' polishes
