@@ -94,7 +94,7 @@ void SamplingSettings::apply(const std::string& key, const std::string& value) {
 void SamplingSettings::validate() const {
   auto bad = [](const std::string& what, const std::string& hint) { throw UsageError(what, hint); };
   if (mode != "adaptive" && mode != "uniform") bad("sampling mode must be adaptive or uniform, got '" + mode + "'", "use --mode adaptive or --mode uniform");
-  if (samples < 1 || samples > 100000) bad("--samples must be in [1, 100000], got " + std::to_string(samples), "the thesis used about 200");
+  if (samples < 1 || samples > 100000) bad("--samples must be in [1, 100000], got " + std::to_string(samples), "the default is " + std::to_string(kDefaultSamples) + "; the thesis used about 200");
   auto check_res = [&](const char* name, int r) {
     if (r < metrics::kMinResolution || r > metrics::kMaxResolution || r % 16 != 0)
       bad(std::string(name) + " must be a multiple of 16 in [64, 4096], got " + std::to_string(r), "use 64, 128 or 256");

@@ -13,13 +13,12 @@ mkdir -p "$out"
 
 # The demo's own catalogue, never the user's default one (~/.cache/proctex/catalog.sqlite, see
 # docs/catalog.md): this one is smaller and must not replace a full build.
-# Why 48 samples per shader and no coverage probes: the default (200 samples, 32 probes) takes
-# about 12 minutes for the 53 shaders on a 2-core machine; 64 samples measured 200 s of CPU time
-# (about 2 minutes of wall time on an idle 2-core machine), so 48 samples keep the catalogue near
-# 1.5 minutes and a fresh `make demo` (dependencies, C++ build ~4-5 min, catalogue, match) under
-# 10 minutes. The build is incremental: a second run checks the file and skips every unchanged
-# shader (about a second). For better matches build the full default catalogue once with
-# `proctex catalog build` and run `proctex match PHOTO` without --db.
+# 48 samples per shader (the default since session 17) and no coverage probes (a measurement the
+# match does not use): about 4 minutes for the 53 shaders on a 2-core machine, so a fresh `make demo`
+# (dependencies, C++ build ~4-5 min, catalogue, match) stays near 10 minutes. The build is
+# incremental: a second run checks the file and skips every unchanged shader (about a second).
+# A denser catalogue (--samples 200, the thesis's density, ~12 minutes) matches photos no better
+# (docs/performance.md, session 15).
 db=$out/catalog.sqlite
 samples=48
 

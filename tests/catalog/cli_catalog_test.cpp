@@ -216,7 +216,7 @@ TEST_F(CatalogCli, EditedShaderIsRebuiltAloneAndMatchRefusesTheStaleCatalogue) {
   EXPECT_EQ(err.find("checker"), std::string::npos) << err;  // unchanged shaders are not blamed
 
   // The command the error suggests, as the user would paste it: it rebuilds the edited shader
-  // alone, with the catalogue's own settings (not the defaults: 200 samples at 256 px, seed 1).
+  // alone, with the catalogue's own settings (not the defaults: 48 samples at 256 px, seed 1).
   const std::string hint = err.substr(std::min(err.find("proctex catalog build"), err.size()));
   ASSERT_FALSE(hint.empty()) << err;
   const std::string suggested = bin + hint.substr(std::string("proctex").size(), hint.find_last_not_of("\n)") - 6);

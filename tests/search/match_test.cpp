@@ -2,7 +2,7 @@
 // star, a failed match reported as no-match, clear errors for bad inputs and catalogues, and the
 // command's options and outputs.
 //
-// The catalogue: 7 shaders (4 at the default 200 samples, 3 at 24), built once and kept in the build tree
+// The catalogue: 7 shaders (4 at 200 samples, 3 at 24), built once and kept in the build tree
 // (build/tests/match-test-catalog.sqlite). ctest runs every test in its own process, so a per-process
 // fixture would rebuild it for each test; instead every process runs the incremental build under a
 // file lock, which builds it the first time (~40 s on an idle 2-core machine) and skips every
@@ -44,9 +44,11 @@ using testing::run_proctex;
 using testing::TempDir;
 
 // bricks and star are the recovery targets; rectangle and circle are the shapes a 4-pointed star
-// was confused with (the thesis's failure). They are built at the default density (200 samples,
-// what a user's catalogue holds): at 24 or 64 samples the nearest star sample is too far and a
+// was confused with (the thesis's failure). They are built at the thesis's density (200 samples;
+// a user's default catalogue holds 48 since session 17): at 24 or 64 samples the nearest star sample is too far and a
 // refined circle wins against the 4-pointed star (measured: circle 0.60-0.62, star 0.56-0.59).
+// Against the whole library this target still goes to circle (S 0.61) with 48 samples and with the
+// four shapes at 200 (session 17): this 7-shader catalogue does not protect a user from that.
 // checker, clouds and stripes are cheap, unrelated textures that must lose, at 24 samples.
 const std::vector<std::string> kDense = {"bricks", "circle", "rectangle", "star"};
 const std::vector<std::string> kSparse = {"checker", "clouds", "stripes"};
