@@ -36,7 +36,8 @@ namespace proctex::catalog {
 
 // Samples kept per shader by default. The thesis used about 200; 48 match photos as well (the same
 // 43 report-split answers), recover more deterministic targets exactly (17/18 against 13/18), make
-// a match about 20 % faster and the catalogue 4x faster to build (docs/performance.md, session 17).
+// a match about 20 % faster and the catalogue 4-5x faster to build (docs/performance.md, sessions
+// 15 and 17).
 inline constexpr int kDefaultSamples = 48;
 
 struct SamplingSettings {

@@ -120,7 +120,7 @@ void add_catalog_command(CLI::App& app, GlobalOptions& global) {
       "'proctex catalog merge' joins the shard files.");
   build->add_option("--db", b->db, db_help());
   build->add_option("--shaders", b->shaders, "comma-separated shader names, or all")->capture_default_str();
-  build->add_option("--samples,-n", b->samples, "samples kept per shader (N in the thesis; 48 match photos as well as 200 and build 4x faster)")->capture_default_str();
+  build->add_option("--samples,-n", b->samples, "samples kept per shader (N in the thesis; 48 match photos as well as 200 and build 4-5x faster)")->capture_default_str();
   build->add_option("--seed", b->seed, "seed of every random choice (same seed + sources = same samples)")->capture_default_str();
   build->add_option("--shard", b->shard, "build shard i of n (1-based), e.g. 3/8; shards are balanced by build cost")
       ->capture_default_str();

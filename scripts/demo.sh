@@ -12,11 +12,12 @@ photo=examples/brick.png
 mkdir -p "$out"
 
 # The demo's own catalogue, never the user's default one (~/.cache/proctex/catalog.sqlite, see
-# docs/catalog.md): this one is smaller and must not replace a full build.
+# docs/catalog.md), so the demo never changes a user's file.
 # 48 samples per shader (the default since session 17) and no coverage probes (a measurement the
-# match does not use): about 2 minutes for the 53 shaders (4 the first time, compiling kernels) on a 2-core machine, so a fresh `make demo`
-# (dependencies, C++ build ~4-5 min, catalogue, match) stays near 10 minutes. The build is
-# incremental: a second run checks the file and skips every unchanged shader (about a second).
+# match does not use): about 2 minutes for the 53 shaders on a 2-core machine (4 the first time,
+# compiling kernels), so a fresh `make demo` (dependencies, C++ build ~4-5 min, catalogue, match)
+# stays near 10 minutes. The build is incremental: a second run checks the file and skips every
+# unchanged shader (about a second).
 # A denser catalogue (--samples 200, the thesis's density, ~12 minutes) matches photos no better
 # (docs/performance.md, session 15).
 db=$out/catalog.sqlite

@@ -45,8 +45,8 @@ using testing::TempDir;
 
 // bricks and star are the recovery targets; rectangle and circle are the shapes a 4-pointed star
 // was confused with (the thesis's failure). They are built at the thesis's density (200 samples;
-// a user's default catalogue holds 48 since session 17): at 24 or 64 samples the nearest star sample is too far and a
-// refined circle wins against the 4-pointed star (measured: circle 0.60-0.62, star 0.56-0.59).
+// a user's default catalogue holds 48 since session 17): at 24 or 64 samples the nearest star
+// sample is too far and a refined circle wins against the 4-pointed star (measured: circle 0.60-0.62, star 0.56-0.59).
 // Against the whole library this target still goes to circle (S 0.61) with 48 samples and with the
 // four shapes at 200 (session 17): this 7-shader catalogue does not protect a user from that.
 // checker, clouds and stripes are cheap, unrelated textures that must lose, at 24 samples.
