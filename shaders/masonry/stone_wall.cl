@@ -7,7 +7,7 @@
 // @param color mortar_color  = (0.20, 0.19, 0.17)      "Joint colour (linear RGB)"
 // @param float variation     = 0.35 [0, 1]             "Stone-to-stone colour variation"
 // @param float relief        = 0.5  [0, 1]             "Rough, rounded stone faces (shading)"
-// @param float roughness     = 0.3  [0, 1]             "Split, pitted stone faces: detail at every scale down to the pixel"
+// @param float roughness     = 0    [0, 1]             "Split, pitted stone faces: detail at every scale down to the pixel"
 
 float3 shade(float2 p, float fw, uint seed, const Params P) {
   const float n_c = (float)P.courses;
@@ -37,7 +37,8 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   sc *= mix(1.0f, 0.6f + 0.4f * smoothstep(0.0f, 0.25f, -d), P.relief * pt_detail_weight(0.25f / w));
   // Split faces: chipped and pitted at every scale down to the pixel, as photographed ashlar is.
   // Without them only many small stones put a photo's fine detail into a render, and matches of
-  // stone-wall photos came back with stones about 3x too small.
+  // stone-wall photos came back with stones about 3x too small. Default 0: specs written before
+  // the parameter existed render as they did.
   const float pits = pt_turbulence(q * 3.0f, w * 3.0f, 7, 2.0f, 0.62f, pt_subseed(seed, 3u));
   sc *= mix(1.0f, 0.35f + 2.6f * pits, P.roughness);
   const float3 mc = P.mortar_color * (1.0f + 0.3f * nf);
