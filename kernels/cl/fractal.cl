@@ -42,8 +42,10 @@ float pt_turbulence(float2 p, float fw, int octaves, float lacunarity, float gai
     const float w = pt_octave_weight(freq, fw);
     norm += amp;
     // A filtered-out octave contributes the mean of |noise| (0.25, measured over 10^6 samples of
-    // pt_gnoise), not zero.
-    sum += amp * mix(0.25f, fabs(pt_gnoise(p, pt_subseed(seed, (uint)i))), w);
+    // pt_gnoise), not zero. Its noise is not evaluated: mix(0.25, x, 0) is 0.25 exactly, so the
+    // value is the same to the bit, and at the match's 128 px most fine octaves are filtered.
+    const float v = w > 0.0f ? fabs(pt_gnoise(p, pt_subseed(seed, (uint)i))) : 0.25f;
+    sum += amp * mix(0.25f, v, w);
     p = pt_octave_rotate(p) * lacunarity;
     freq *= lacunarity;
     amp *= gain;
