@@ -40,7 +40,8 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   // Grain at every scale down to the pixel, as photographed stone and concrete show. Without it
   // only many small pavers put a photo's fine detail into a render: matches of tile and flagstone
   // photos came back 3-6x too small (session 18). Default 0: earlier specs render as they did.
-  pc *= 1.0f + P.grain * 1.2f * pt_fbm(q * 3.0f, w * 3.0f, 8, 2.0f, 0.75f, pt_subseed(seed, 5u));
+  if (P.grain > 0.0f)  // the default 0 renders as before the parameter existed, at its cost
+    pc *= 1.0f + P.grain * 1.2f * pt_fbm(q * 3.0f, w * 3.0f, 8, 2.0f, 0.75f, pt_subseed(seed, 5u));
   pc *= mix(1.0f, mix(1.0f - 0.5f * P.bevel, 1.0f, smoothstep(0.0f, 0.08f, -d)), pt_detail_weight(0.08f / w));
   const float3 jc = P.joint_color * (1.0f + 0.3f * n + 0.3f * fine);
   return pt_saturate3(mix(jc, pc, cover));

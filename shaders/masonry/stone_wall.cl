@@ -38,9 +38,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   // Split faces: chipped and pitted at every scale down to the pixel, as photographed ashlar is.
   // Without them only many small stones put a photo's fine detail into a render, and matches of
   // stone-wall photos came back with stones about 3x too small. Default 0: specs written before
-  // the parameter existed render as they did.
-  const float pits = pt_turbulence(q * 3.0f, w * 3.0f, 7, 2.0f, 0.62f, pt_subseed(seed, 3u));
-  sc *= mix(1.0f, 0.35f + 2.6f * pits, P.roughness);
+  // the parameter existed render as they did, and without paying for the noise.
+  if (P.roughness > 0.0f) {
+    const float pits = pt_turbulence(q * 3.0f, w * 3.0f, 7, 2.0f, 0.62f, pt_subseed(seed, 3u));
+    sc *= mix(1.0f, 0.35f + 2.6f * pits, P.roughness);
+  }
   const float3 mc = P.mortar_color * (1.0f + 0.3f * nf);
   return pt_saturate3(mix(mc, sc, cover));
 }

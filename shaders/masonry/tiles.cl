@@ -27,7 +27,8 @@ float3 shade(float2 p, float fw, uint seed, const Params P) {
   // Grain at every scale down to the pixel, as photographed stone and ceramic show. Without it
   // only many small tiles put a photo's fine detail into a render: matches of tile photos came
   // back 3-6x too small (session 18). Default 0: earlier specs render as they did.
-  tc *= 1.0f + P.grain * 1.2f * pt_fbm(q * 3.0f, w * 3.0f, 8, 2.0f, 0.75f, pt_subseed(seed, 5u));
+  if (P.grain > 0.0f)  // the default 0 renders as before the parameter existed, at its cost
+    tc *= 1.0f + P.grain * 1.2f * pt_fbm(q * 3.0f, w * 3.0f, 8, 2.0f, 0.75f, pt_subseed(seed, 5u));
   // Bevel: the face darkens over the outer tenth of the tile.
   const float rim = smoothstep(0.0f, 0.1f, -d);
   tc *= mix(1.0f, mix(1.0f - 0.6f * P.bevel, 1.0f, rim), pt_detail_weight(0.1f / w));
