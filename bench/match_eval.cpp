@@ -4,8 +4,9 @@
 //                    [--candidates M] [--screen-resolution R] [--race R]
 //                    [--real LABELS [--split tune|report|all] [--real-images DIR]] [--json FILE]
 // Synthetic: N targets, target i from shader i mod L of the library (sorted by name) at a random
-// point of its unit parameter space (a portable random stream from --seed, so not a catalogue
-// sample) rendered at 256x256 with render seed 7000000 + i (the catalogue's render seeds are
+// point of its unit parameter space (a portable random stream of its own, from --seed, the
+// shader's name and i - so not a catalogue sample, and a shader's new parameter redraws only
+// that shader's targets) rendered at 256x256 with render seed 7000000 + i (the catalogue's render seeds are
 // drawn from its own stream). Each target is matched against the whole catalogue with the
 // default options. Reported: shader identified (top-1), the target shader's rank in the structural
 // scan of the catalogue (what --candidates cuts), final similarity, verdict, time; for
@@ -42,6 +43,7 @@
 
 #include "catalog/store.h"
 #include "core/error.h"
+#include "core/hash.h"
 #include "metrics/metric.h"
 #include "search/match.h"
 #include "shaders/library.h"
@@ -86,6 +88,14 @@ double shifted_rmse(const Image& a, const Image& b) {
 
 // SplitMix64: portable, so the targets are the same on every machine.
 struct Random {
+  // Target i's own stream, from --seed, the shader's name and i: a parameter added to one shader
+  // redraws only that shader's targets (one stream for all targets, as before session 19, redrew
+  // every target after it, so two library versions were not measured on the same test).
+  static Random for_target(uint64_t seed, const std::string& shader, int i) {
+    Random r{seed ^ std::stoull(fnv1a_hex(shader), nullptr, 16)};
+    r.state ^= r.next() + static_cast<uint64_t>(i);
+    return r;
+  }
   uint64_t state;
   uint64_t next() {
     uint64_t z = (state += 0x9E3779B97F4A7C15ull);
@@ -243,7 +253,6 @@ int main(int argc, char** argv) {
     options.race_every_lane = race_every;
     if (!pictures.empty()) fs::create_directories(pictures);
     Renderer renderer(lib);
-    Random rng{seed};
 
     std::string table =
         "| # | target shader | structural rank | matched | S | ceiling | S/ceiling | reproduced | verdict | time (s) | "
@@ -259,6 +268,7 @@ int main(int argc, char** argv) {
       const ShaderDecl& decl = lib.get(names[i % names.size()]);
       const ParameterSpace space(decl);
       std::vector<double> unit(space.dimensions());
+      Random rng = Random::for_target(seed, decl.name, i);
       for (auto& u : unit) u = rng.unit();
       unit = space.snap(unit);
       const auto packed = space.to_packed(unit);

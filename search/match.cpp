@@ -672,6 +672,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
                                     could_outclass.begin() + std::min(could_outclass.size(), i + kRaceWave)));
   }
   for (auto& lane : lanes) lane.race_similarity = lane.refined.similarity;
+  result.timings["race"] = seconds_since(t_local);  // included in "local"; the rest is the finalists' refinement
   // Finalists: the best `starts` lanes by similarity and selection together, and the best `starts`
   // lanes by the similarity the race reached alone (fewer when they coincide). Either order alone
   // lost a right answer (measured): by the race's similarity the gravel photo's gravel lane lost to

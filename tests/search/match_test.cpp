@@ -504,6 +504,9 @@ TEST_F(MatchCli, JsonResultRenderAndCompare) {
                          : s >= 0.25                                             ? "approximate"
                                                                                  : "no-match");
   EXPECT_GT(j["timings"]["total"].get<double>(), 0.0);
+  // The race is part of the local stage (the rest is the finalists' refinement).
+  EXPECT_GT(j["timings"]["race"].get<double>(), 0.0);
+  EXPECT_LE(j["timings"]["race"].get<double>(), j["timings"]["local"].get<double>());
   EXPECT_EQ(j["catalogue"]["path"], db());
   EXPECT_EQ(j["catalogue"]["shaders"].size(), kShaderCount);
   EXPECT_EQ(j["catalogue"]["metric"], metrics::default_metric().id());
