@@ -455,11 +455,20 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   }
   const ColourTarget colour_target = make_colour_target(target, o.screen_resolution);
   const metrics::Features target_screen = metric.features(colour_target.rgb, o.screen_resolution);
-  std::vector<Start> screened;
-  long evaluations = 0;
+  // The host threads of the screening and the race (the race's comment below).
+  const int race_threads = o.budget.max_evaluations > 0 ? 1
+                           : o.threads > 0               ? o.threads
+                                                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // The candidates are screened independently (each its own renders and colour fits), so on
+  // several host threads: one computes features while another's render runs on the device. Each
+  // candidate's starts are kept in its slot, so `screened` is in the selection's order whatever
+  // the threads.
+  std::vector<std::vector<Start>> screened_of(chosen.size());
+  std::vector<long> screen_renders(chosen.size(), 0);
+  std::mutex screen_mutex;
   size_t screened_so_far = 0;
-  for (int c : chosen) {
-    const auto& scan = scans[c];
+  parallel_for(chosen.size(), race_threads, [&](size_t k) {
+    const auto& scan = scans[chosen[k]];
     const ShaderDecl& decl = library.get(scan.catalogue.shader);
     std::vector<int> best(scan.similarity.size());
     for (size_t i = 0; i < best.size(); ++i) best[i] = static_cast<int>(i);
@@ -475,23 +484,34 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       seeds.push_back(sample.seed);
     }
     const auto fits = fit_colours(decl, packs, seeds, pinned, colour_target, renderer, false);
-    evaluations += colour_fit_renders(decl, pinned, keep);
+    screen_renders[k] = colour_fit_renders(decl, pinned, keep);
     for (size_t i = 0; i < keep; ++i) {
       const double s = metric.similarity(target_screen, metric.features(fits[i].preview, o.screen_resolution));
-      screened.push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]],
-                          fits[i].packed, scan.probability});
+      screened_of[k].push_back({scan.catalogue.shader, &scan.catalogue.samples[best[i]], s, scan.similarity[best[i]],
+                                fits[i].packed, scan.probability});
     }
     // Live previews (proctex serve): the best screened start so far after each candidate - the
-    // first is the most likely material - so the first preview does not wait for the whole
-    // screening (12 candidates: ~85% of the global search). `best` stays untouched, as below.
+    // likeliest materials are screened first - so the first preview does not wait for the whole
+    // screening (12 candidates: ~85% of the global search).
+    std::lock_guard lock(screen_mutex);
     ++screened_so_far;
-    if (progress && screened_so_far < chosen.size() && !screened.empty()) {
-      const auto& top = *std::max_element(screened.begin(), screened.end(),
-                                          [](const Start& a, const Start& b) { return a.similarity < b.similarity; });
-      state.best_shader = top.shader;
-      state.best_spec = spec_from_packed(library.get(top.shader), top.packed, top.sample->seed);
-      report("screened " + std::to_string(screened_so_far) + "/" + std::to_string(chosen.size()));
+    if (progress && screened_so_far < chosen.size()) {
+      const Start* top = nullptr;
+      for (const auto& starts : screened_of)
+        for (const auto& st : starts)
+          if (!top || st.similarity > top->similarity) top = &st;
+      if (top) {
+        state.best_shader = top->shader;
+        state.best_spec = spec_from_packed(library.get(top->shader), top->packed, top->sample->seed);
+        report("screened " + std::to_string(screened_so_far) + "/" + std::to_string(chosen.size()));
+      }
     }
+  });
+  std::vector<Start> screened;
+  long evaluations = 0;
+  for (size_t k = 0; k < chosen.size(); ++k) {
+    screened.insert(screened.end(), screened_of[k].begin(), screened_of[k].end());
+    evaluations += screen_renders[k];
   }
   for (int c : chosen) {
     double screen_best = 0.0;
@@ -614,10 +634,8 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // The race's lanes are independent (each its own objective, start and seed), so they run on
   // several host threads: one lane computes its features while another's render runs on the
   // device, and the result is the same as one after the other (test Match.ParallelRace*). Not
-  // under a render budget (--budget N), which is spent in the lanes' order.
-  const int race_threads = o.budget.max_evaluations > 0 ? 1
-                           : o.threads > 0               ? o.threads
-                                                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // under a render budget (--budget N), which is spent in the lanes' order (race_threads, above).
+
   // The final choice weighs the similarity with the selection's probability of the shader: a
   // flexible shader that tunes itself into a look-alike must also be a likely material.
   // `share`: the part of selection_weight the selection gets (less on clean patterns, below).
