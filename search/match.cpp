@@ -170,6 +170,9 @@ constexpr double kPatternPeakiness = 0.7;
 // next to the similarity: its weight in the final choice is this share of selection_weight. A
 // superellipse target went to `sky` (S 0.24, P 0.36) over a rounded `rectangle` (S 0.51, P 0.05).
 constexpr double kPatternSelectionShare = 0.25;
+// The final choice's score of a looks-the-same candidate (match.h kLooksTheSameRmse), minus its
+// RMS: below a certain match (1e6 + S) and a pixel-exact one (2e6 - RMS), above any decision.
+constexpr double kLooksTheSameScore = 5e5;
 // The polish of a deterministic pattern: the blurred-magnitude stage's share of the renders, its
 // blur (frequency bins at the refinement resolution), and the discrete parameters enumerated
 // whole (stripes up to 64, grid cells up to 32: a local search cannot count them).
@@ -342,6 +345,12 @@ double pixel_exact_limit(const Image& target) {
   const size_t n = static_cast<size_t>(target.width) * target.height;
   if (n == 0) return kPixelExactRmse;
   return std::min(kPixelExactRmse, kPixelExactShare * flat_rmse(target));
+}
+
+double looks_the_same_limit(const Image& target) {
+  const size_t n = static_cast<size_t>(target.width) * target.height;
+  if (n == 0) return kLooksTheSameRmse;
+  return std::min(kLooksTheSameRmse, kPixelExactShare * flat_rmse(target));
 }
 
 std::string verdict_for(double s, double probability, bool pattern) {
@@ -854,6 +863,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   std::optional<AlignStages> stages_aligned;
   std::optional<ColourTarget> registered_target;
   const double exact_limit = pixel_exact_limit(target);
+  const double same_limit = looks_the_same_limit(target);
   struct Candidate {
     const Refined* from;
     std::vector<float> packed;
@@ -892,6 +902,10 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
 
   // The final choice's score of a candidate (used after the polishes, and by the polish's skip rule).
   const auto pixel_exact = [&](const Candidate& c) { return c.image_rmse >= 0 && c.image_rmse <= exact_limit; };
+  // A deterministic candidate that registers within the looks-the-same limit of a clean pattern.
+  const auto looks_the_same = [&](const Candidate& c) {
+    return pattern && c.seed_independent && c.image_rmse >= 0 && c.image_rmse <= same_limit;
+  };
   const auto visibly_other = [&](const Candidate& c) {
     return pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
   };
@@ -899,6 +913,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     return pixel_exact(c) ? 2e6 - c.image_rmse
            : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
+           : looks_the_same(c) ? kLooksTheSameScore - c.image_rmse
                : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
                      (pattern ? 0.0 : o.shape_weight * c.shape_distance);
   };
@@ -1199,6 +1214,25 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         kept = exact;
         kept_rmse = exact_rmse;
         best_s = metric.similarity(target_full, features[exact]);
+      } else {
+        // Not pixel-exact, but close to the eye where what the statistics prefer is visibly
+        // another image (looks_the_same, match.h): the pixels decide. A ring target's pixel polish
+        // reached RMS 0.009 while the similarity kept its finalist - the colours swapped, the
+        // ring inverted, RMS 0.12 - since it rated that 0.65 and the near-copy 0.50 (session 19).
+        int nearest = -1;
+        for (size_t k = 0; k < tries.size(); ++k)
+          if (nearest < 0 || rmses[names[k]].get<double>() < rmses[names[nearest]].get<double>())
+            nearest = static_cast<int>(k);
+        const double preferred_rmse = kept >= 0 ? rmses[names[kept]].get<double>()
+                                                : final_candidates[best_of_shader].image_rmse;
+        const double nearest_rmse = nearest >= 0 ? rmses[names[nearest]].get<double>() : -1.0;
+        if (nearest >= 0 && nearest != kept && nearest_rmse <= same_limit &&
+            (preferred_rmse < 0 || preferred_rmse > kVisiblyOtherRmse)) {
+          kept = nearest;
+          kept_rmse = nearest_rmse;
+          best_s = metric.similarity(target_full, features[nearest]);
+          polish["looks_the_same"] = true;
+        }
       }
     }
     polish["kept"] = kept >= 0;
@@ -1231,7 +1265,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (!final_choice || score_of(c) > score_of(*final_choice)) final_choice = &c;
     if (!most_similar || c.similarity > most_similar->similarity) most_similar = &c;
   }
-  const bool outclassed = final_choice && score_of(*final_choice) < 1e6 && final_choice->similarity * kOutclassedRatio < most_similar->similarity;
+  const bool outclassed = final_choice && score_of(*final_choice) < kLooksTheSameScore - 1.0 && final_choice->similarity * kOutclassedRatio < most_similar->similarity;
   if (outclassed) final_choice = most_similar;
   if (final_choice) {
     const Candidate& c = *final_choice;
