@@ -771,7 +771,9 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   std::vector<std::optional<FullScore>> scored(finalists);
   std::vector<bool> unrefined(finalists, false);
   if (pattern || o.refine_every_finalist) {
-    for (size_t i = 0; i < finalists; ++i) refine_finalist(i, i + 1);
+    // Every finalist is refined here, each its own search (as the race's lanes): on the race's
+    // host threads, with the same result as one after the other.
+    parallel_for(finalists, race_threads, [&](size_t i) { refine_finalist(i, i + 1); });
   } else {
     // Finalists that cannot win are not refined further (renders are the match's time). The final
     // choice maximises log S + lambda log P with S <= 1, so a finalist whose lambda log P is not
