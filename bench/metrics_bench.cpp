@@ -34,6 +34,15 @@ BENCHMARK_CAPTURE(BM_Features, colour, "colour")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Features, structure, "structure")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Features, composite, "composite")->Unit(benchmark::kMillisecond);
 
+// The refinement's resolution (search::MatchOptions::coarse_resolution): a match computes these
+// features once per render, between renders, so they add to a match's wall time.
+void BM_FeaturesAt128(benchmark::State& state) {
+  const metrics::Metric& m = metrics::default_metric();
+  m.features(sample(), 128);
+  for (auto _ : state) benchmark::DoNotOptimize(m.features(sample(), 128));
+}
+BENCHMARK(BM_FeaturesAt128)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_Features1024(benchmark::State& state) {
   // A 1024 x 1024 input: the resize to the analysis resolution is part of the cost.
   const Image big = resize(sample(), 1024, 1024);

@@ -6,6 +6,7 @@
 #include <span>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "metrics/calibration.h"
 #include "metrics/colour.h"
 #include "metrics/pyramid.h"
@@ -160,13 +161,23 @@ std::string CompositeMetric::summary() const {
   return s;
 }
 
+namespace {
+constexpr int kComputeThreads = 2;
+}  // namespace
+
 std::vector<float> CompositeMetric::compute(const Analysis& analysis) const {
+  // The components are independent, so two threads share them: a match computes features between
+  // its renders (one refinement is a chain of render, features, render...), and the device's
+  // threads wait meanwhile. Handed out last first: the costliest, structure, is last by default.
+  // The values do not depend on the threads.
+  std::vector<std::vector<float>> parts(components_.size());
+  parallel_for(components_.size(), kComputeThreads, [&](size_t k) {
+    const size_t i = components_.size() - 1 - k;
+    parts[i] = components_[i].metric->compute(analysis);
+  });
   std::vector<float> f;
   f.reserve(size_);
-  for (const Component& c : components_) {
-    std::vector<float> part = c.metric->compute(analysis);
-    f.insert(f.end(), part.begin(), part.end());
-  }
+  for (const auto& part : parts) f.insert(f.end(), part.begin(), part.end());
   return f;
 }
 
