@@ -41,6 +41,7 @@
 #include <set>
 #include <string>
 
+#include "catalog/catalog.h"
 #include "catalog/store.h"
 #include "core/error.h"
 #include "core/hash.h"
@@ -230,6 +231,9 @@ int main(int argc, char** argv) {
   try {
     const auto& lib = ShaderLibrary::builtin();
     catalog::Store store(db, catalog::Store::Access::Read);
+    // As `proctex match` does: a catalogue of older shader sources would be measured silently
+    // (session 19 ran a binary older than its catalogue without a word).
+    catalog::require_current_sources(store, lib);
     std::vector<std::string> names;
     for (const auto& s : store.shaders()) names.push_back(s.name);
     std::sort(names.begin(), names.end());
