@@ -232,7 +232,7 @@ int main(int argc, char** argv) {
     const auto& lib = ShaderLibrary::builtin();
     catalog::Store store(db, catalog::Store::Access::Read);
     // As `proctex match` does: a catalogue of older shader sources would be measured silently
-    // (session 19 ran a binary older than its catalogue without a word).
+    // (in session 19 an older binary started on a newer catalogue without a word).
     catalog::require_current_sources(store, lib);
     std::vector<std::string> names;
     for (const auto& s : store.shaders()) names.push_back(s.name);
