@@ -341,17 +341,18 @@ nlohmann::json scan_pattern(Objective& objective, RefineResult& r, RefineOptions
 
 }  // namespace
 
-double pixel_exact_limit(const Image& target) {
+namespace {
+// An RMS limit of at most `cap` and at most kPixelExactShare of the target's own RGB deviation.
+double limit_for(const Image& target, double cap) {
   const size_t n = static_cast<size_t>(target.width) * target.height;
-  if (n == 0) return kPixelExactRmse;
-  return std::min(kPixelExactRmse, kPixelExactShare * flat_rmse(target));
+  if (n == 0) return cap;
+  return std::min(cap, kPixelExactShare * flat_rmse(target));
 }
+}  // namespace
 
-double looks_the_same_limit(const Image& target) {
-  const size_t n = static_cast<size_t>(target.width) * target.height;
-  if (n == 0) return kLooksTheSameRmse;
-  return std::min(kLooksTheSameRmse, kPixelExactShare * flat_rmse(target));
-}
+double pixel_exact_limit(const Image& target) { return limit_for(target, kPixelExactRmse); }
+
+double looks_the_same_limit(const Image& target) { return limit_for(target, kLooksTheSameRmse); }
 
 std::string verdict_for(double s, double probability, bool pattern) {
   if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
@@ -1200,11 +1201,13 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (polish["deterministic"]) {
       if (!registered_target) registered_target = make_colour_target(target, o.resolution);
       nlohmann::json rmses = nlohmann::json::object();
+      std::vector<double> rmse_of(tries.size());
       int exact = -1;
       double exact_rmse = exact_limit;
       for (size_t k = 0; k < tries.size(); ++k) {
         const double rmse = metrics::AlignedMetric::register_rgb(registered_target->rgb, images[k]).rmse;
         rmses[names[k]] = rmse;
+        rmse_of[k] = rmse;
         if (rmse <= exact_rmse) {
           exact_rmse = rmse;
           exact = static_cast<int>(k);
@@ -1221,13 +1224,10 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         // another image (looks_the_same, match.h): the pixels decide. A ring target's pixel polish
         // reached RMS 0.009 while the similarity kept its finalist - the colours swapped, the
         // ring inverted, RMS 0.12 - since it rated that 0.65 and the near-copy 0.50 (session 19).
-        int nearest = -1;
-        for (size_t k = 0; k < tries.size(); ++k)
-          if (nearest < 0 || rmses[names[k]].get<double>() < rmses[names[nearest]].get<double>())
-            nearest = static_cast<int>(k);
-        const double preferred_rmse = kept >= 0 ? rmses[names[kept]].get<double>()
-                                                : final_candidates[best_of_shader].image_rmse;
-        const double nearest_rmse = nearest >= 0 ? rmses[names[nearest]].get<double>() : -1.0;
+        const int nearest = rmse_of.empty() ? -1
+                            : static_cast<int>(std::min_element(rmse_of.begin(), rmse_of.end()) - rmse_of.begin());
+        const double preferred_rmse = kept >= 0 ? rmse_of[kept] : final_candidates[best_of_shader].image_rmse;
+        const double nearest_rmse = nearest >= 0 ? rmse_of[nearest] : -1.0;
         if (nearest >= 0 && nearest != kept && nearest_rmse <= same_limit &&
             (preferred_rmse < 0 || preferred_rmse > kVisiblyOtherRmse)) {
           kept = nearest;
