@@ -794,18 +794,63 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       return decision(scored[i]->similarity, lanes[i].start.probability) - o.shape_weight * scored[i]->shape_distance;
     };
     double best = -std::numeric_limits<double>::infinity();
+    const auto ruled_out = [&](size_t i, const std::vector<double>& race_unit) {
+      const Lane& lane = lanes[i];
+      evaluations += 2;
+      return !nearly_deterministic(renderer, *lane.decl, lane.space->to_packed(race_unit), lane.start.sample->seed);
+    };
+    // In decision order, race_threads finalists at a time (a wave): whether one is refined depends
+    // on the scores of those before it (the bound `best`), so the members of a wave that the bound
+    // does not rule out yet are refined together, each from a saved state, and then, in order, a
+    // member that a member before it has ruled out gets its saved state back - as if it had never
+    // been refined. The same result as one after the other (each refinement is its own search); the
+    // second core refines while the first does.
+    struct Saved {
+      RefineResult refined;
+      Objective::State objective;
+    };
     size_t done = 0;
-    for (size_t i : by_decision) {
-      ++done;
-      Lane& lane = lanes[i];
-      if (decision(1.0, lane.start.probability) <= best) {
-        unrefined[i] = !nearly_deterministic(renderer, *lane.decl, lane.space->to_packed(lane.refined.unit),
-                                             lane.start.sample->seed);
-        evaluations += 2;
+    for (size_t next = 0; next < by_decision.size();) {
+      // A member joins the wave only when the bound it would face, as far as the race's similarities
+      // tell (a finalist's 256 px score after refinement was within 0.5 of its race score in log),
+      // leaves it refined: on the report photos a second finalist was ruled out in half of the
+      // cases, and a refinement undone is a core taken from the one that counts.
+      std::vector<size_t> wave;
+      double expected_bound = best;
+      while (next < by_decision.size() && wave.size() < static_cast<size_t>(race_threads)) {
+        const Lane& lane = lanes[by_decision[next]];
+        if (!wave.empty() && decision(1.0, lane.start.probability) <= expected_bound) break;
+        expected_bound = std::max(expected_bound, decision(lane.refined.similarity, lane.start.probability));
+        wave.push_back(by_decision[next++]);
       }
-      if (!unrefined[i]) refine_finalist(i, done);
-      scored[i] = score_full(i);
-      best = std::max(best, achieved(i));
+      std::vector<bool> checked(wave.size(), false);
+      std::vector<size_t> refined_now;  // wave positions
+      std::vector<Saved> saved(wave.size());
+      for (size_t k = 0; k < wave.size(); ++k) {
+        Lane& lane = lanes[wave[k]];
+        if (decision(1.0, lane.start.probability) <= best) {
+          checked[k] = true;
+          unrefined[wave[k]] = ruled_out(wave[k], lane.refined.unit);
+        }
+        if (unrefined[wave[k]]) continue;
+        if (!checked[k]) saved[k] = {lane.refined, lane.objective->save()};
+        refined_now.push_back(k);
+      }
+      parallel_for(refined_now.size(), std::min<int>(race_threads, static_cast<int>(refined_now.size())),
+                   [&](size_t r) { refine_finalist(wave[refined_now[r]], done + refined_now[r] + 1); });
+      for (size_t k = 0; k < wave.size(); ++k) {
+        const size_t i = wave[k];
+        Lane& lane = lanes[i];
+        if (!checked[k] && decision(1.0, lane.start.probability) <= best &&
+            (unrefined[i] = ruled_out(i, saved[k].refined.unit))) {
+          evaluations -= lane.objective->evaluations() - saved[k].objective.evaluations;
+          lane.objective->restore(std::move(saved[k].objective));
+          lane.refined = std::move(saved[k].refined);
+        }
+        scored[i] = score_full(i);
+        best = std::max(best, achieved(i));
+      }
+      done += wave.size();
     }
     // The outclassed rule (stage 4) can still choose an unrefined finalist when its similarity is
     // far above the choice's: one within reach of that (refinement raising its similarity by up to

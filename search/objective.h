@@ -42,6 +42,21 @@ class Objective {
   const ParameterSpace& space() const { return space_; }
   uint32_t seed() const { return seed_; }
 
+  // What a search changes here (the cache, the best point, the render count): saved before a
+  // speculative search and restored when its result is not wanted, so that the objective is as if
+  // the search had not run (same cache hits, same counts afterwards).
+  struct State {
+    std::map<std::vector<float>, double> cache;
+    Evaluation best;
+    long evaluations = 0;
+  };
+  State save() const { return {cache_, best_, evaluations_}; }
+  void restore(State state) {
+    cache_ = std::move(state.cache);
+    best_ = std::move(state.best);
+    evaluations_ = state.evaluations;
+  }
+
   void set_budget(Budget budget);
   // True once the budget is spent or stop() was called (from a signal handler too).
   bool exhausted() const;

@@ -68,6 +68,31 @@ TEST(Refine, BudgetStopsTheSearchWithTheBestSoFar) {
   EXPECT_EQ(r.similarity, objective.best().similarity);
 }
 
+// A speculative refinement that is not wanted (the match's finalists, refined two at a time) is
+// undone: after restore the objective answers, counts and keeps its best as if it had never run.
+TEST(Objective, RestoreUndoesASearchAsIfItHadNotRun) {
+  Fixture f("checker:squares=6");
+  Objective objective(f.space, f.target, metrics::default_metric(), f.renderer, 0, kResolution);
+  const std::vector<double> start(f.space.dimensions(), 0.3);
+  const double at_start = objective.evaluate(start);
+  const Objective::State saved = objective.save();
+  RefineOptions options;
+  options.max_evaluations = 60;
+  const RefineResult r = refine(objective, start, options);
+  ASSERT_GT(objective.evaluations(), 1);
+  ASSERT_GT(r.similarity, at_start) << "the search found nothing to undo";
+  const std::vector<float> found = f.space.to_packed(r.unit);
+  objective.restore(saved);
+  EXPECT_EQ(objective.evaluations(), 1);
+  EXPECT_EQ(objective.best().similarity, at_start);
+  EXPECT_EQ(objective.best().packed, f.space.to_packed(start));
+  EXPECT_EQ(objective.evaluate(start), at_start);
+  EXPECT_EQ(objective.evaluations(), 1) << "the start is still answered from the cache";
+  EXPECT_EQ(objective.evaluate(r.unit), r.similarity) << "the undone point is rendered again, same value";
+  EXPECT_EQ(objective.evaluations(), 2) << "the undone search's cache entries are gone";
+  EXPECT_EQ(f.space.to_packed(r.unit), found);
+}
+
 TEST(Refine, EveryOptimizerImprovesOnItsStart) {
   for (const auto& name : optimizer_names()) {
     Fixture f("checker:squares=5,color_b=(0.3,0.3,0.6)");
