@@ -166,9 +166,13 @@ std::vector<float> apply_fixed(const ShaderDecl& decl, const std::vector<float>&
 // (tilings, shapes, clean bricks; a faint seed-driven grain is allowed). Mean |difference| over
 // a 64 px render, linear RGB.
 constexpr double kPatternPeakiness = 0.7;
-// On a clean pattern the selection - a classifier of photographed materials - is weak evidence
-// next to the similarity: its weight in the final choice is this share of selection_weight. A
-// superellipse target went to `sky` (S 0.24, P 0.36) over a rounded `rectangle` (S 0.51, P 0.05).
+// On a clean pattern whose most similar finalist is deterministic (a shape, a tiling: what no
+// photo of a material shows), the selection - a classifier of photographed materials - is weak
+// evidence next to the similarity: its weight in the final choice is this share of
+// selection_weight. A superellipse target went to `sky` (S 0.24, P 0.36) over a rounded
+// `rectangle` (S 0.51, P 0.05). Otherwise it keeps the whole weight (session 20): with the share
+// on every clean pattern, photos that the spectrum calls patterns (slate roofs, parquet planks,
+// curtains) went to flexible look-alikes (`stone_wall`, `grass`) over a likelier right shader.
 constexpr double kPatternSelectionShare = 0.25;
 // The final choice's score of a looks-the-same candidate (match.h kLooksTheSameRmse), minus its
 // RMS: below a certain match (1e6 + S) and a pixel-exact one (2e6 - RMS), above any decision.
@@ -228,8 +232,11 @@ double seed_difference(Renderer& renderer, const ShaderDecl& decl, const std::ve
   return diff / double(images[0].pixels.size());
 }
 
+// Below this seed difference a point counts as deterministic (a faint seed-driven grain allowed).
+constexpr double kNearlyDeterministic = 0.004;
+
 bool nearly_deterministic(Renderer& renderer, const ShaderDecl& decl, const std::vector<float>& packed, uint32_t seed) {
-  return seed_difference(renderer, decl, packed, seed) < 0.004;
+  return seed_difference(renderer, decl, packed, seed) < kNearlyDeterministic;
 }
 
 // Share of the lightness spectrum's energy (DC left out) in its strongest 2% of coefficients:
@@ -391,7 +398,7 @@ nlohmann::json MatchResult::to_json() const {
           {"outclassed", outclassed},
           {"image_rmse", image_rmse >= 0 ? nlohmann::json(image_rmse) : nlohmann::json(nullptr)},
           {"polish", polish},
-          {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}}},
+          {"selection", {{"version", selection_version()}, {"weight", kSelectionWeight}, {"share", selection_share}}},
           {"thresholds", {{"good", kGoodMatch}, {"good_probability", kGoodProbability}, {"approximate", kApproximateMatch}}}};
 }
 
@@ -921,13 +928,16 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     double image_rmse = -1;  // deterministic polish, or a seed-independent point on a clean pattern:
                              // registered RGB RMSE (metrics/aligned.h)
     bool seed_independent = false;  // measured on clean patterns only
+    bool deterministic = false;     // nearly (kNearlyDeterministic); finalists on clean patterns only
     double shape_distance = 0;      // to the target (selection.h); 0 for polished points
   };
   // On a clean pattern, a seed-independent finalist's registered RMS: what decides whether its
   // S >= kCertainMatch may still call it "good" (kVisiblyOtherRmse).
   const auto measure_exactness = [&](Candidate& c, const Image& render) {
     if (!pattern) return;
-    c.seed_independent = seed_difference(renderer, *c.from->decl, c.packed, c.from->seed) == 0.0;
+    const double seed_change = seed_difference(renderer, *c.from->decl, c.packed, c.from->seed);
+    c.seed_independent = seed_change == 0.0;
+    c.deterministic = seed_change < kNearlyDeterministic;
     evaluations += 2;
     if (!c.seed_independent) return;
     if (!registered_target) registered_target = make_colour_target(target, o.resolution);
@@ -957,12 +967,20 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   const auto visibly_other = [&](const Candidate& c) {
     return pattern && c.seed_independent && c.image_rmse > kVisiblyOtherRmse;
   };
+  // The selection's share of its weight (kPatternSelectionShare), once for the whole choice: reduced
+  // on a clean pattern whose most similar finalist is deterministic, before any polish.
+  if (pattern && !final_candidates.empty() &&
+      std::max_element(final_candidates.begin(), final_candidates.end(), [](const Candidate& a, const Candidate& b) {
+        return a.similarity < b.similarity;
+      })->deterministic)
+    result.selection_share = kPatternSelectionShare;
+  const auto selection_share = [&](const Candidate&) { return result.selection_share; };
   const auto score_of = [&](const Candidate& c) {
     return pixel_exact(c) ? 2e6 - c.image_rmse
            : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
            : looks_the_same(c) ? kLooksTheSameScore - c.image_rmse
-               : decision(c.similarity, c.from->probability, pattern ? kPatternSelectionShare : 1.0) -
+               : decision(c.similarity, c.from->probability, selection_share(c)) -
                      (pattern ? 0.0 : o.shape_weight * c.shape_distance);
   };
   // Whether the polish of a finalist whose shader is not deterministic could change the final
@@ -980,7 +998,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       best = std::max(best, score_of(other));
       least = std::min(least, other.similarity);
     }
-    return decision(reach, c.from->probability, kPatternSelectionShare) > best || reach > kOutclassedRatio * least;
+    return decision(reach, c.from->probability, selection_share(c)) > best || reach > kOutclassedRatio * least;
   };
 
   // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric

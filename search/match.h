@@ -159,6 +159,7 @@ struct MatchResult {
   nlohmann::json timings = nlohmann::json::object();
   nlohmann::json catalogue = nlohmann::json::object();  // path, shaders, metric id and version
   nlohmann::json polish = nlohmann::json::object();     // the exact polish: deterministic?, kept?
+  double selection_share = 1.0;  // of selection_weight in the final choice (kPatternSelectionShare)
 
   nlohmann::json to_json() const;
 };

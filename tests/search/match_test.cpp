@@ -166,6 +166,10 @@ TEST(Match, FourPointedStarIsAStarWithExactlyFourPoints) {
     EXPECT_NEAR(param(r, "bg")[c].get<double>(), bg[c], 0.1) << "channel " << c << describe(r);
   }
   EXPECT_EQ(r.verdict, "good") << describe(r);
+  // A deterministic shape leads the finalists on a clean pattern: the selection (a classifier of
+  // photographed materials) weighs only a share in the final choice.
+  EXPECT_TRUE(r.pattern) << describe(r);
+  EXPECT_LT(r.selection_share, 1.0) << describe(r);
 }
 
 // A star with n points turned by 360/n is the same star (shaders/shape/star.cl declares
@@ -451,6 +455,15 @@ TEST(Match, PolishesThatCannotChangeTheChoiceAreSkippedAndTheAnswerStays) {
   }
   EXPECT_GE(skipped, 1) << describe(some);
   EXPECT_LT(some.evaluations, all.evaluations);
+  // Its most similar finalist is seed-driven, so the selection keeps its whole weight (session 20:
+  // photos of parquet, slate roofs and curtains are clean patterns by their spectrum too, and the
+  // reduced share let flexible look-alikes win there).
+  const nlohmann::json* top = nullptr;
+  for (const auto& s : some.starts)
+    if (s.value("finalist", false) && (!top || s["refined_similarity"] > (*top)["refined_similarity"])) top = &s;
+  ASSERT_NE(top, nullptr);
+  EXPECT_EQ((*top)["polish"]["deterministic"], false) << top->dump();
+  EXPECT_EQ(some.selection_share, 1.0) << describe(some);
   for (const auto& s : all.starts) {
     const bool skipped_in_all = s.contains("polish") && s["polish"].contains("skipped") &&
                                 s["polish"]["skipped"] == "cannot change the final choice";
