@@ -974,13 +974,12 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
         return a.similarity < b.similarity;
       })->deterministic)
     result.selection_share = kPatternSelectionShare;
-  const auto selection_share = [&](const Candidate&) { return result.selection_share; };
   const auto score_of = [&](const Candidate& c) {
     return pixel_exact(c) ? 2e6 - c.image_rmse
            : pattern && c.similarity >= kCertainMatch && !visibly_other(c)
                ? 1e6 + c.similarity
            : looks_the_same(c) ? kLooksTheSameScore - c.image_rmse
-               : decision(c.similarity, c.from->probability, selection_share(c)) -
+               : decision(c.similarity, c.from->probability, result.selection_share) -
                      (pattern ? 0.0 : o.shape_weight * c.shape_distance);
   };
   // Whether the polish of a finalist whose shader is not deterministic could change the final
@@ -998,7 +997,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       best = std::max(best, score_of(other));
       least = std::min(least, other.similarity);
     }
-    return decision(reach, c.from->probability, selection_share(c)) > best || reach > kOutclassedRatio * least;
+    return decision(reach, c.from->probability, result.selection_share) > best || reach > kOutclassedRatio * least;
   };
 
   // 5. Exact polish of a deterministic pattern (metrics/magnitude.h): the statistical metric

@@ -65,10 +65,9 @@ inline constexpr double kVisiblyOtherRmse = 0.015;
 // kPixelExactShare of the target's RGB deviation) has the target's layout and colours - close to
 // the eye, though not pixel-exact (the accepted results of the deterministic benchmark reach
 // 0.0104). When the statistics prefer a visibly other point of the same shader, the polish keeps
-// this one, and in
-// the final choice it ranks below pixel-exact results and certain matches but above the
-// similarity-and-selection decision (a ring target's near-copy at RMS 0.009 rated S 0.50 lost to
-// the ring inverted, colours swapped, at RMS 0.12 and S 0.65; session 19). Not "good" by itself:
+// this one, and in the final choice it ranks below pixel-exact results and certain matches but
+// above the similarity-and-selection decision (a ring target's near-copy at RMS 0.009 rated S 0.50
+// lost to the ring inverted, colours swapped, at RMS 0.12 and S 0.65; session 19). Not "good" by itself:
 // the verdict still needs pixel-exactness or a certain similarity.
 inline constexpr double kLooksTheSameRmse = 0.01;
 double looks_the_same_limit(const Image& target);
