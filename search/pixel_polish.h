@@ -44,6 +44,16 @@ double flat_rmse(const Image& image);
 inline constexpr long kPixelPolishEvaluations = 600;
 inline constexpr long kPixelPolishBudget = 1500;
 
+// Basin hopping after the starts (pixel_polish.cpp): a polished point farther than this from the
+// target is moved at random and polished again, each hop with this many renders, while the budget
+// lasts; the moves come from a fixed seed.
+inline constexpr double kHopAboveRmse = 1e-3;
+inline constexpr long kHopEvaluations = 150;
+inline constexpr double kHopContinueShare = 0.9;  // a hop ending below this share of the best goes on
+// A polished start this close at no shift ends the polish: nothing left to find.
+inline constexpr double kExactAtOriginRmse = 2e-4;
+inline constexpr uint32_t kHopSeed = 12;
+
 struct PixelPolishResult {
   std::vector<float> packed;
   double rmse = -1.0;  // RGB RMS against the target at (dx, dy), on the overlap; < 0: nothing polished
