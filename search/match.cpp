@@ -1226,7 +1226,10 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
       const long pixel_budget = o.budget.max_evaluations > 0
                                     ? std::min(kPixelPolishBudget, o.budget.max_evaluations - evaluations)
                                     : kPixelPolishBudget;
-      if (closest_rmse <= kPixelPolishStartRmse && pixel_budget > 10) {
+      // The polish itself decides which starts are close enough (pixel_polish.h): at the
+      // shader's origin, after a colour fit, up to kPixelPolishOriginStartRmse - a soft ring
+      // registered at RMS 0.067 in the wrong colours polished to 2e-7 (session 21).
+      if (closest_rmse <= kPixelPolishOriginStartRmse && pixel_budget > 10) {
         nlohmann::json pixel_report;
         const auto px = pixel_polish(*base.decl, tries[closest], base.seed, pinned, registered_target->rgb, renderer,
                                      pixel_budget, pixel_report);

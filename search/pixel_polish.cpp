@@ -260,7 +260,7 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
 void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector<std::string>& pinned,
                         const std::vector<std::string>& kept, const Image& target, Renderer& renderer,
                         long max_evaluations, PixelPolishResult& best, nlohmann::json& report) {
-  if (best.rmse < kHopAboveRmse) return;
+  if (best.rmse < kHopAboveRmse || best.rmse > kPixelPolishStartRmse) return;
   std::vector<std::string> shape_pinned = kept;
   for (const auto& p : decl.params)
     if (p.type == ParamType::Color) shape_pinned.push_back(p.name);

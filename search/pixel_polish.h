@@ -45,8 +45,9 @@ inline constexpr long kPixelPolishEvaluations = 600;
 inline constexpr long kPixelPolishBudget = 1500;
 
 // Basin hopping after the starts (pixel_polish.cpp): a polished point farther than this from the
-// target is moved at random and polished again, each hop with this many renders, while the budget
-// lasts; the moves come from a fixed seed.
+// target, but not beyond kPixelPolishStartRmse (farther, the shape is not the target's: another
+// shader, another count), is moved and polished again, each hop with this many renders, while the
+// budget lasts; the random moves come from a fixed seed.
 inline constexpr double kHopAboveRmse = 1e-3;
 inline constexpr long kHopEvaluations = 150;
 inline constexpr double kHopContinueShare = 0.9;  // a hop ending below this share of the best goes on

@@ -219,6 +219,25 @@ TEST(Match, AThinSoftRingComesBackWithinTwoPercent) {
   EXPECT_EQ(r.verdict, "good") << describe(r);
 }
 
+// A soft ring in colours the align stage got wrong (synthetic target 11 of bench_match_eval
+// --targets 53, session 21): the best try registered at RGB RMS 0.067, and the pixel polish was
+// only handed tries within 0.05, so the match stayed there (S 0.75, `approximate`). At the shader's
+// origin, after a least-squares colour fit, the polish admits starts up to 0.1 and reaches the
+// target's pixels. This ring's blur is wider than its band, so its parameters are not all fixed by
+// the image (PixelPolish.ASoftRingComesBackToTheSameImageAndItsIdentifiableShape): the pixels are
+// what must come back.
+TEST(Match, ASoftRingInTheWrongColoursIsPolishedToTheTargetsPixels) {
+  const Image target = render("circle:size=0.8391,ring=0.5933,softness=0.2992,fg=(0.5026,0.5397,0.9958),"
+                              "bg=(0.0022,0.628,0.0781),seed=9011");
+  const MatchResult r = match_image(target);
+  ASSERT_EQ(r.spec.shader, "circle") << describe(r);
+  const Image matched = render(r.spec);
+  double sum = 0;
+  for (size_t i = 0; i < matched.pixels.size(); ++i) sum += std::pow(matched.pixels[i] - target.pixels[i], 2);
+  EXPECT_LT(std::sqrt(sum / double(matched.pixels.size())), 0.005) << describe(r);
+  EXPECT_EQ(r.verdict, "good") << describe(r);
+}
+
 // Soft stripes at 30 degrees: the statistics leave the duty and the softness loose along a ridge
 // (before the align stage the match ended at duty 0.72 in swapped colours, softness 0.62: a
 // visibly other texture). The complementary duty in swapped colours is the same image shifted
