@@ -156,7 +156,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) { ... }
   the same image, P divided by the int parameter COUNT when given - the star's
   `rotation ... period=360/points`; the matcher reports the value reduced into [min, min + period)
   and bench_match_eval compares values modulo the period; tests/shaders checks each declared
-  period by rendering). Every parameter needs a one-line help text.
+  period by rendering), `exchange=A/B` (a symmetry across the ends of the range: the value at one
+  end renders as the other end with the float parameters A and B exchanged - the rectangle's and
+  superellipse's `rotation ... [0, 90] exchange=width/height`; the pixel polish carries a point
+  stopped at one end to the other; tests/shaders checks it by rendering). Every parameter needs a
+  one-line help text.
 - `p` is the texture coordinate (the image height spans 1 unit, y down), `fw` the pixel footprint
   in texture units (filter with it: `pt_filtered_step`, `pt_coverage`, fractal sums take it),
   `seed` the texture's seed (all randomness must come from the `pt_hash*` functions with it).

@@ -253,9 +253,10 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
 // exponent traded for the turn (RMS 0.046); a soft ring polished to a tent, its blur wider than its
 // band, where the target's band has a flat top (RMS 0.009; every point on the straight line to the
 // truth is worse until the regime changes). Each hop moves the shape parameters and gives the move
-// a short local search; a move that ends lower becomes the point the next hop leaves from. First
-// each parameter alone to the other half of its range (half a turn of a rotation), then all of them
-// at random within a radius that grows from hop to hop (a fixed seed: the same answer every run).
+// a short local search; a move that ends lower becomes the point the next hop leaves from. First a
+// parameter stopped at an end of its range is carried across a declared exchange (shader.h), then
+// each parameter alone goes to the other half of its range (half a turn of a rotation), then all of
+// them at random within a radius that grows from hop to hop (a fixed seed: the same answer every run).
 // A hop that lands clearly lower is polished on before the next move.
 void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector<std::string>& pinned,
                         const std::vector<std::string>& kept, const Image& target, Renderer& renderer,
@@ -266,28 +267,49 @@ void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector
     if (p.type == ParamType::Color) shape_pinned.push_back(p.name);
   const int dims = ParameterSpace(decl, best.packed, shape_pinned).dimensions();
   if (dims == 0) return;
+  const auto is_kept = [&](const std::string& n) { return std::find(kept.begin(), kept.end(), n) != kept.end(); };
   std::mt19937 random(kHopSeed);
   const auto uniform = [&] { return double(random()) / 4294967296.0; };
   static constexpr double kRadii[] = {0.05, 0.15, 0.3, 0.5};
   nlohmann::json hops = nlohmann::json::array();
   bool hopped = false, continue_last = false;
+  // Hops 0 .. dims-1: across a declared exchange (shader.h), then dims .. 2 dims-1: to the other
+  // half, then at random. An exchange move that does not apply (the parameter away from its ends,
+  // or an exchanged parameter pinned) is skipped without a render.
   for (int hop = 0; best.rmse >= kHopAboveRmse && max_evaluations - best.evaluations >= kHopEvaluations;) {
     const ParameterSpace shape(decl, best.packed, shape_pinned);
     auto unit = shape.to_unit(best.packed);
+    std::vector<float> moved;
     nlohmann::json entry;
     if (continue_last) {
       entry["continued"] = true;  // the last hop landed lower: its local search goes on first
     } else if (hop < dims) {
-      unit[hop] = std::fmod(unit[hop] + 0.5, 1.0);
-      entry["moved"] = shape.dims()[hop].param->name;
+      const ParamDecl& p = *shape.dims()[hop].param;
+      ++hop;
+      const double u = unit[hop - 1];
+      if (p.exchange.empty() || is_kept(p.exchange[0]) || is_kept(p.exchange[1]) ||
+          (u > kHopExchangeEnd && u < 1.0 - kHopExchangeEnd))
+        continue;
+      // The point itself seen from the other end: the same image, but the local search can now
+      // go on past the end it was stopped at (a superellipse at 0 degrees for the target's 82).
+      moved = best.packed;
+      const float range = p.max - p.min;
+      float& v = moved[p.offset];
+      v = std::clamp(u < 0.5 ? v + range : v - range, p.min, p.max);
+      std::swap(moved[decl.find(p.exchange[0])->offset], moved[decl.find(p.exchange[1])->offset]);
+      entry["exchanged"] = p.name;
+    } else if (hop < 2 * dims) {
+      unit[hop - dims] = std::fmod(unit[hop - dims] + 0.5, 1.0);
+      entry["moved"] = shape.dims()[hop - dims].param->name;
     } else {
-      const double radius = kRadii[(hop - dims) % std::size(kRadii)];
+      const double radius = kRadii[(hop - 2 * dims) % std::size(kRadii)];
       for (double& u : unit) u = std::clamp(u + radius * (2.0 * uniform() - 1.0), 0.0, 1.0);
       entry["radius"] = radius;
     }
-    if (!continue_last) ++hop;
+    if (!continue_last && entry.find("exchanged") == entry.end()) ++hop;
+    if (moved.empty()) moved = shape.to_packed(unit);
     long used = 0;
-    const auto [end, rmse] = polish_start(decl, shape.to_packed(unit), seed, pinned, kept, target, best.dx, best.dy,
+    const auto [end, rmse] = polish_start(decl, moved, seed, pinned, kept, target, best.dx, best.dy,
                                           renderer, kHopEvaluations, used, entry, false);
     best.evaluations += used;
     entry["rmse_after"] = rmse;

@@ -68,8 +68,17 @@ void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
           at.fail("period '" + expr + "': expected a number or NUMBER/COUNT_PARAMETER");
       }
       if (!(p.period > 0.0f)) at.fail("period of '" + p.name + "' must be positive");
+    } else if (flag.starts_with("exchange=")) {
+      // exchange=A/B (checked against the other declarations in parse_shader)
+      const std::string expr = flag.substr(9);
+      const auto slash = expr.find('/');
+      static const std::regex name_re(R"([A-Za-z_]\w*)");
+      if (slash == std::string::npos || !std::regex_match(expr.substr(0, slash), name_re) ||
+          !std::regex_match(expr.substr(slash + 1), name_re))
+        at.fail("exchange '" + expr + "': expected two parameter names, A/B");
+      p.exchange = {expr.substr(0, slash), expr.substr(slash + 1)};
     } else
-      at.fail("unknown flag '" + flag + "' (known: log, linear, fixed, search, period=P[/COUNT])");
+      at.fail("unknown flag '" + flag + "' (known: log, linear, fixed, search, period=P[/COUNT], exchange=A/B)");
   }
   p.help = m[2].str();
   if (p.help.empty()) at.fail("parameter '" + p.name + "' needs a one-line help text");
@@ -145,6 +154,8 @@ ParamDecl parse_param(const std::string& body, const LineError& at) {
   if (p.type != ParamType::Bool) check_range(p, at);
   if (p.period > 0.0f && (p.type != ParamType::Float || p.scale != Scale::Linear))
     at.fail("period of '" + p.name + "': only a linear float parameter can be periodic");
+  if (!p.exchange.empty() && (p.type != ParamType::Float || p.scale != Scale::Linear))
+    at.fail("exchange of '" + p.name + "': only a linear float parameter can declare one");
   return p;
 }
 
@@ -259,6 +270,17 @@ ShaderDecl parse_shader(const std::string& path, const std::string& source) {
     } else if (std::regex_search(line, m, stray_re)) {
       at.fail("unknown declaration '@" + m[1].str() + "' (known: @shader, @param)");
     }
+  }
+  for (const auto& p : decl.params) {
+    if (p.exchange.empty()) continue;
+    const LineError at{path, p.line};
+    const ParamDecl* a = decl.find(p.exchange[0]);
+    const ParamDecl* b = decl.find(p.exchange[1]);
+    if (!a || !b || a == b || a == &p || b == &p || a->type != ParamType::Float || b->type != ParamType::Float)
+      at.fail("exchange of '" + p.name + "': '" + p.exchange[0] + "' and '" + p.exchange[1] +
+              "' must be two other float parameters here");
+    if (a->min != b->min || a->max != b->max || a->scale != b->scale)
+      at.fail("exchange of '" + p.name + "': '" + a->name + "' and '" + b->name + "' need the same range and scale");
   }
   for (const auto& p : decl.params) {
     if (p.period_per.empty()) continue;

@@ -13,6 +13,10 @@
 // `period=P` or `period=P/COUNT` (a symmetry: v and v + P render the same image; COUNT an int
 // parameter the period is divided by: a star with n points turned by 360/n is the same star):
 //   // @param float rotation = 0 [0, 180] period=360/points "Rotation in degrees"
+// `exchange=A/B` (a symmetry across the ends of the range: the value at one end renders as the
+// value at the other end with the float parameters A and B exchanged - a shape symmetric under a
+// half turn, turned through a quarter turn, trades its width for its height):
+//   // @param float rotation = 0 [0, 90] exchange=width/height "Rotation in degrees"
 // Colours range over [0, 1] per channel unless a range is given.
 #include <optional>
 #include <string>
@@ -42,6 +46,10 @@ struct ParamDecl {
   // the period is divided by ("" for a constant period).
   float period = 0.0f;
   std::string period_per;
+  // Flag `exchange=A/B` (linear floats only): min and max of this parameter render the same image
+  // with A and B (floats of one range) exchanged. Empty: none declared. The pixel polish moves a
+  // point stuck at one end to the other this way (search/pixel_polish.cpp).
+  std::vector<std::string> exchange;
   int line = 0;    // line of the declaration in the shader file
   int offset = 0;  // first float of this parameter in the packed vector
 

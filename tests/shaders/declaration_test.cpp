@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "shaders/codegen.h"
+#include "shaders/library.h"
 #include "shaders/shader.h"
 
 namespace proctex {
@@ -103,7 +104,12 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"// @param int a = 1 [0, 2] period=1 \"h\"", 3, "linear float"},
                       BadCase{"// @param float a = 1 [0, 2] period=360/ok \"h\"", 3, "not an int parameter"},
                       BadCase{"// @param float a = 1 [0, 2] period=360/nothing \"h\"", 3, "not an int parameter"},
-                      BadCase{"// @param float a = 1 [0, 2] period=x/y \"h\"", 3, "as a number"}));
+                      BadCase{"// @param float a = 1 [0, 2] period=x/y \"h\"", 3, "as a number"},
+                      BadCase{"// @param float a = 1 [0, 2] exchange=ok \"h\"", 3, "two parameter names"},
+                      BadCase{"// @param float a = 1 [0, 2] exchange=ok/nothing \"h\"", 3, "two other float parameters"},
+                      BadCase{"// @param float a = 1 [0, 2] exchange=ok/a \"h\"", 3, "two other float parameters"},
+                      BadCase{"// @param float a = 1 [0, 2] exchange=ok/ok \"h\"", 3, "two other float parameters"},
+                      BadCase{"// @param int a = 1 [0, 2] exchange=ok/ok \"h\"", 3, "linear float"}));
 
 // A symmetry period is data (issue 12: a star turned by 360/n is the same star): constant or
 // divided by a count, read back per point; values are reduced into [min, min + period) and
@@ -140,6 +146,28 @@ float3 shade(float2 p, float fw, uint seed, const Params P) { return 0; }
   EXPECT_NEAR(parameter_difference(d, rot, 1.0f, 44.0f, packed), 29.0, 1e-5);
   EXPECT_NEAR(parameter_difference(d, rot, 10.0f, 30.0f, packed), 20.0, 1e-5);
   EXPECT_NEAR(canonical_packed(d, packed)[1], 50.0f, 1e-5);
+}
+
+// An exchange symmetry (issue 12: a rectangle at 0 degrees is the one at 90 with its width and
+// height exchanged) names two float parameters of one range; the library's two shapes declare it.
+TEST(Declaration, ExchangeNamesTwoFloatsOfOneRange) {
+  const std::string head = "// @shader \"x\"\n// @param float w = 0.5 [0, 1] \"w\"\n";
+  const std::string shade = "float3 shade(float2 p, float fw, uint seed, const Params P) { return 0; }\n";
+  const ShaderDecl d = parse_shader("shaders/test/ex.cl", head + "// @param float h = 0.5 [0, 1] \"h\"\n"
+                                    "// @param float rot = 0 [0, 90] exchange=w/h \"r\"\n" + shade);
+  EXPECT_EQ(d.find("rot")->exchange, (std::vector<std::string>{"w", "h"}));
+  EXPECT_TRUE(d.find("w")->exchange.empty());
+  try {
+    parse_shader("shaders/test/ex.cl", head + "// @param float h = 0.5 [0, 2] \"h\"\n"
+                                       "// @param float rot = 0 [0, 90] exchange=w/h \"r\"\n" + shade);
+    FAIL() << "accepted an exchange of two ranges";
+  } catch (const Error& e) {
+    EXPECT_NE(e.message().find("shaders/test/ex.cl:4"), std::string::npos) << e.message();
+    EXPECT_NE(e.message().find("same range"), std::string::npos) << e.message();
+  }
+  for (const char* shape : {"rectangle", "superellipse"})
+    EXPECT_EQ(ShaderLibrary::builtin().get(shape).find("rotation")->exchange,
+              (std::vector<std::string>{"width", "height"})) << shape;
 }
 
 TEST(Declaration, MissingShaderLineIsAnError) {

@@ -186,6 +186,41 @@ TEST_P(EveryShader, DeclaredSymmetryPeriodsRenderTheSameImage) {
   }
 }
 
+// A declared exchange (shader.h `exchange=A/B`) is the pixel polish's promise (search/pixel_polish.cpp
+// carries a point stuck at one end of the range to the other): min with (A, B) renders as max with
+// (B, A). Checked at random points of every shader that declares one (the rectangle and the
+// superellipse: 0 degrees is 90 with width and height exchanged), and the control: max without
+// the exchange is another image (A and B kept apart so it is).
+TEST_P(EveryShader, DeclaredExchangesRenderTheSameImage) {
+  const ShaderDecl& d = decl();
+  RenderSettings s;
+  s.width = s.height = 128;
+  for (const auto& p : d.params) {
+    if (p.exchange.empty()) continue;
+    const ParamDecl& a = *d.find(p.exchange[0]);
+    const ParamDecl& b = *d.find(p.exchange[1]);
+    for (auto packed : random_vectors(d, 6)) {
+      packed[p.offset] = p.min;
+      packed[a.offset] = a.min + 0.3f * (a.max - a.min);
+      packed[b.offset] = a.min + 0.8f * (a.max - a.min);
+      auto exchanged = packed, unexchanged = packed;
+      exchanged[p.offset] = unexchanged[p.offset] = p.max;
+      std::swap(exchanged[a.offset], exchanged[b.offset]);
+      const auto images = renderer.render_batch(d, {packed, exchanged, unexchanged}, {3u, 3u, 3u}, s);
+      double same = 0, other = 0;
+      for (size_t i = 0; i < images[0].pixels.size(); ++i) {
+        same += std::pow(double(images[0].pixels[i] - images[1].pixels[i]), 2);
+        other += std::pow(double(images[0].pixels[i] - images[2].pixels[i]), 2);
+      }
+      same = std::sqrt(same / images[0].pixels.size());
+      other = std::sqrt(other / images[0].pixels.size());
+      EXPECT_LT(same, 5e-4) << p.name << " at its ends, " << a.name << "/" << b.name << " exchanged, at " << describe(d, packed);
+      EXPECT_GT(other, std::max(0.005, 20 * same)) << p.name << " at its ends without the exchange looks the same at "
+                                                  << describe(d, packed);
+    }
+  }
+}
+
 // Mean absolute difference in sRGB units between a 256^2 render and a 1024^2 render box-reduced to
 // 256^2 (the reference: 16 samples per pixel). Tolerance 0.02 = about 5 of 255 sRGB levels on
 // average: invisible in side-by-side viewing, while point-sampled edges and noise octaves finer
