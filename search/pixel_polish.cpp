@@ -276,7 +276,12 @@ void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector
   // Hops 0 .. dims-1: across a declared exchange (shader.h), then dims .. 2 dims-1: to the other
   // half, then at random. An exchange move that does not apply (the parameter away from its ends,
   // or an exchanged parameter pinned) is skipped without a render.
-  for (int hop = 0; best.rmse >= kHopAboveRmse && max_evaluations - best.evaluations >= kHopEvaluations;) {
+  // A hop needs its whole allowance; the continuation of one that landed lower takes what is left.
+  const auto affordable = [&] {
+    const long left = max_evaluations - best.evaluations;
+    return left >= kHopEvaluations || (continue_last && left >= kHopEvaluations / 4);
+  };
+  for (int hop = 0; best.rmse >= kHopAboveRmse && affordable();) {
     const ParameterSpace shape(decl, best.packed, shape_pinned);
     auto unit = shape.to_unit(best.packed);
     std::vector<float> moved;
@@ -309,8 +314,9 @@ void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector
     if (!continue_last && entry.find("exchanged") == entry.end()) ++hop;
     if (moved.empty()) moved = shape.to_packed(unit);
     long used = 0;
-    const auto [end, rmse] = polish_start(decl, moved, seed, pinned, kept, target, best.dx, best.dy,
-                                          renderer, kHopEvaluations, used, entry, false);
+    const auto [end, rmse] = polish_start(decl, moved, seed, pinned, kept, target, best.dx, best.dy, renderer,
+                                          std::min(kHopEvaluations, max_evaluations - best.evaluations), used, entry,
+                                          false);
     best.evaluations += used;
     entry["rmse_after"] = rmse;
     hops.push_back(entry);
