@@ -38,10 +38,13 @@ std::string format_range(const ParamDecl& p) {
   return fmt::format("[{:.4g}, {:.4g}]", p.min, p.max);
 }
 
-// ", period 360/points" for a parameter with a declared symmetry period (shader.h).
+// ", period 360/points" or ", exchange width/height" for a parameter with a declared symmetry
+// (shader.h).
 std::string period_text(const ParamDecl& p) {
-  if (!(p.period > 0.0f)) return "";
-  return fmt::format(", period {:.4g}{}", p.period, p.period_per.empty() ? "" : "/" + p.period_per);
+  std::string text;
+  if (p.period > 0.0f) text += fmt::format(", period {:.4g}{}", p.period, p.period_per.empty() ? "" : "/" + p.period_per);
+  if (!p.exchange.empty()) text += fmt::format(", exchange {}/{}", p.exchange[0], p.exchange[1]);
+  return text;
 }
 
 nlohmann::json param_json(const ParamDecl& p) {
@@ -49,6 +52,7 @@ nlohmann::json param_json(const ParamDecl& p) {
                       {"default", param_to_json(p, p.default_value.data())},
                       {"scale", to_string(p.scale)}, {"searchable", p.searchable}, {"help", p.help}};
   if (p.period > 0.0f) j["period"] = p.period_per.empty() ? nlohmann::json(p.period) : nlohmann::json(fmt::format("{:.4g}/{}", p.period, p.period_per));
+  if (!p.exchange.empty()) j["exchange"] = p.exchange;
   if (p.type == ParamType::Enum) j["values"] = p.enum_values;
   else if (p.type != ParamType::Bool) j["range"] = {p.min, p.max};
   return j;

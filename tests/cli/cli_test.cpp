@@ -70,6 +70,21 @@ TEST_F(Cli, ShadersListAndShowAgree) {
   EXPECT_NE(human.out.find("default"), std::string::npos);
 }
 
+// A parameter's declared symmetry (shader.h: period, exchange) is what a shader author checks:
+// `shaders show` prints it in the table and in the JSON.
+TEST_F(Cli, ShadersShowTellsADeclaredSymmetry) {
+  const auto human = run("shaders show superellipse");
+  ASSERT_EQ(human.exit_code, 0) << human.err;
+  EXPECT_NE(human.out.find("exchange width/height"), std::string::npos) << human.out;
+  const auto star = run("shaders show star");
+  EXPECT_NE(star.out.find("period 360/points"), std::string::npos) << star.out;
+  const auto j = nlohmann::json::parse(run("shaders show rectangle --json").out);
+  for (const auto& p : j["params"]) {
+    if (p["name"] == "rotation") EXPECT_EQ(p["exchange"], nlohmann::json({"width", "height"})) << p.dump();
+    else EXPECT_FALSE(p.contains("exchange")) << p.dump();
+  }
+}
+
 TEST_F(Cli, RendersInlineSpecAtRequestedSize) {
   const auto r = run("render 'checker:squares=4,color_a=#ff0000' -o " + path("c.png") + " --size 200 --width 300");
   ASSERT_EQ(r.exit_code, 0) << r.err;
