@@ -4,10 +4,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <set>
+#include <random>
 #include <stdexcept>
 #include <tuple>
-
-#include <random>
 
 #include <nlopt.hpp>
 
@@ -210,6 +209,14 @@ std::vector<float> joint_polish(const ShaderDecl& decl, const std::vector<float>
   return space.to_packed(r.unit);
 }
 
+// The parameters a shape-only search keeps: `kept` and every colour (the colours are projected out).
+std::vector<std::string> shape_pinned_of(const ShaderDecl& decl, const std::vector<std::string>& kept) {
+  std::vector<std::string> shape_pinned = kept;
+  for (const auto& p : decl.params)
+    if (p.type == ParamType::Color) shape_pinned.push_back(p.name);
+  return shape_pinned;
+}
+
 // One start polished at its registration: projected when the shader's colours are linear (the
 // colour model reproduces the render), jointly otherwise. Returns the end point and its RMS (from
 // a render), never worse than the start.
@@ -225,9 +232,7 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
   const metrics::Features target_features = pixels.target_features(target, dx, dy);
   const double start_rmse = render_rmse(decl, packed, seed, pixels, target_features, renderer);
   used += 1;
-  std::vector<std::string> shape_pinned = kept;
-  for (const auto& p : decl.params)
-    if (p.type == ParamType::Color) shape_pinned.push_back(p.name);
+  const std::vector<std::string> shape_pinned = shape_pinned_of(decl, kept);
   // Is the colour model exact here? Fit once and compare its residual with a render's.
   const auto first = fit_colours_to_pixels(decl, packed, seed, pinned, wanted, mask, side, renderer, ColourBounds::Bounded);
   const double first_rmse = render_rmse(decl, first.packed, seed, pixels, target_features, renderer);
@@ -262,9 +267,7 @@ void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector
                         const std::vector<std::string>& kept, const Image& target, Renderer& renderer,
                         long max_evaluations, PixelPolishResult& best, nlohmann::json& report) {
   if (best.rmse < kHopAboveRmse || best.rmse > kPixelPolishStartRmse) return;
-  std::vector<std::string> shape_pinned = kept;
-  for (const auto& p : decl.params)
-    if (p.type == ParamType::Color) shape_pinned.push_back(p.name);
+  const std::vector<std::string> shape_pinned = shape_pinned_of(decl, kept);
   const int dims = ParameterSpace(decl, best.packed, shape_pinned).dimensions();
   if (dims == 0) return;
   const auto is_kept = [&](const std::string& n) { return std::find(kept.begin(), kept.end(), n) != kept.end(); };
@@ -288,30 +291,27 @@ void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector
     nlohmann::json entry;
     if (continue_last) {
       entry["continued"] = true;  // the last hop landed lower: its local search goes on first
-    } else if (hop < dims) {
-      const ParamDecl& p = *shape.dims()[hop].param;
-      ++hop;
-      const double u = unit[hop - 1];
+    } else if (const int h = hop++; h < dims) {
+      const ParamDecl& p = *shape.dims()[h].param;
+      const double u = unit[h];
       if (p.exchange.empty() || is_kept(p.exchange[0]) || is_kept(p.exchange[1]) ||
           (u > kHopExchangeEnd && u < 1.0 - kHopExchangeEnd))
         continue;
-      // The point itself seen from the other end: the same image, but the local search can now
-      // go on past the end it was stopped at (a superellipse at 0 degrees for the target's 82).
+      // The point seen from the other end (the same image, up to the few hundredths of the range
+      // it was short of its end): the local search can now go on past the end it was stopped at
+      // (a superellipse at 0 degrees for the target's 82).
       moved = best.packed;
-      const float range = p.max - p.min;
-      float& v = moved[p.offset];
-      v = std::clamp(u < 0.5 ? v + range : v - range, p.min, p.max);
+      moved[p.offset] = u < 0.5 ? p.max : p.min;
       std::swap(moved[decl.find(p.exchange[0])->offset], moved[decl.find(p.exchange[1])->offset]);
       entry["exchanged"] = p.name;
-    } else if (hop < 2 * dims) {
-      unit[hop - dims] = std::fmod(unit[hop - dims] + 0.5, 1.0);
-      entry["moved"] = shape.dims()[hop - dims].param->name;
+    } else if (h < 2 * dims) {
+      unit[h - dims] = std::fmod(unit[h - dims] + 0.5, 1.0);
+      entry["moved"] = shape.dims()[h - dims].param->name;
     } else {
-      const double radius = kRadii[(hop - 2 * dims) % std::size(kRadii)];
+      const double radius = kRadii[(h - 2 * dims) % std::size(kRadii)];
       for (double& u : unit) u = std::clamp(u + radius * (2.0 * uniform() - 1.0), 0.0, 1.0);
       entry["radius"] = radius;
     }
-    if (!continue_last && entry.find("exchanged") == entry.end()) ++hop;
     if (moved.empty()) moved = shape.to_packed(unit);
     long used = 0;
     const auto [end, rmse] = polish_start(decl, moved, seed, pinned, kept, target, best.dx, best.dy, renderer,

@@ -89,6 +89,13 @@ std::vector<std::vector<float>> random_vectors(const ShaderDecl& d, int count) {
   return out;
 }
 
+// RGB RMS difference of two renders of one size.
+double rms_difference(const Image& a, const Image& b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) sum += std::pow(double(a.pixels[i] - b.pixels[i]), 2);
+  return std::sqrt(sum / a.pixels.size());
+}
+
 class EveryShader : public ::testing::TestWithParam<std::string> {
  protected:
   const ShaderDecl& decl() const { return ShaderLibrary::builtin().get(GetParam()); }
@@ -168,13 +175,7 @@ TEST_P(EveryShader, DeclaredSymmetryPeriodsRenderTheSameImage) {
       half[p.offset] = static_cast<float>(packed[p.offset] + 0.5 * period);
       const auto images = renderer.render_batch(d, {packed, turned, half}, {3u, 3u, 3u}, s);
       // RGB RMS differences (single-precision angles move an edge pixel's coverage by a few 1e-3)
-      double same = 0, other = 0;
-      for (size_t i = 0; i < images[0].pixels.size(); ++i) {
-        same += std::pow(double(images[0].pixels[i] - images[1].pixels[i]), 2);
-        other += std::pow(double(images[0].pixels[i] - images[2].pixels[i]), 2);
-      }
-      same = std::sqrt(same / images[0].pixels.size());
-      other = std::sqrt(other / images[0].pixels.size());
+      const double same = rms_difference(images[0], images[1]), other = rms_difference(images[0], images[2]);
       std::printf("%s %s: period %.3f, RMS %.2e, half a period %.2e\n", d.name.c_str(), p.name.c_str(), period, same, other);
       // a tenth of the matcher's pixel-exact limit (search/match.h kPixelExactRmse, 0.005); the
       // hard edges of a 7-pointed star turned by 51.4 degrees measured 1.8e-4
@@ -207,13 +208,7 @@ TEST_P(EveryShader, DeclaredExchangesRenderTheSameImage) {
       exchanged[p.offset] = unexchanged[p.offset] = p.max;
       std::swap(exchanged[a.offset], exchanged[b.offset]);
       const auto images = renderer.render_batch(d, {packed, exchanged, unexchanged}, {3u, 3u, 3u}, s);
-      double same = 0, other = 0;
-      for (size_t i = 0; i < images[0].pixels.size(); ++i) {
-        same += std::pow(double(images[0].pixels[i] - images[1].pixels[i]), 2);
-        other += std::pow(double(images[0].pixels[i] - images[2].pixels[i]), 2);
-      }
-      same = std::sqrt(same / images[0].pixels.size());
-      other = std::sqrt(other / images[0].pixels.size());
+      const double same = rms_difference(images[0], images[1]), other = rms_difference(images[0], images[2]);
       EXPECT_LT(same, 5e-4) << p.name << " at its ends, " << a.name << "/" << b.name << " exchanged, at " << describe(d, packed);
       EXPECT_GT(other, std::max(0.005, 20 * same)) << p.name << " at its ends without the exchange looks the same at "
                                                   << describe(d, packed);
