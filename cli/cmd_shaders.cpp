@@ -38,12 +38,13 @@ std::string format_range(const ParamDecl& p) {
   return fmt::format("[{:.4g}, {:.4g}]", p.min, p.max);
 }
 
-// ", period 360/points" or ", exchange width/height" for a parameter with a declared symmetry
-// (shader.h).
+// ", period 360/points", ", exchange width/height" or ", needs wave" for a parameter with a
+// declared symmetry or dependency (shader.h).
 std::string period_text(const ParamDecl& p) {
   std::string text;
   if (p.period > 0.0f) text += fmt::format(", period {:.4g}{}", p.period, p.period_per.empty() ? "" : "/" + p.period_per);
   if (!p.exchange.empty()) text += fmt::format(", exchange {}/{}", p.exchange[0], p.exchange[1]);
+  if (!p.needs.empty()) text += ", needs " + p.needs;
   return text;
 }
 
@@ -53,6 +54,7 @@ nlohmann::json param_json(const ParamDecl& p) {
                       {"scale", to_string(p.scale)}, {"searchable", p.searchable}, {"help", p.help}};
   if (p.period > 0.0f) j["period"] = p.period_per.empty() ? nlohmann::json(p.period) : nlohmann::json(fmt::format("{:.4g}/{}", p.period, p.period_per));
   if (!p.exchange.empty()) j["exchange"] = p.exchange;
+  if (!p.needs.empty()) j["needs"] = p.needs;
   if (p.type == ParamType::Enum) j["values"] = p.enum_values;
   else if (p.type != ParamType::Bool) j["range"] = {p.min, p.max};
   return j;
@@ -163,8 +165,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) { ... }
   period by rendering), `exchange=A/B` (a symmetry across the ends of the range: the value at one
   end renders as the other end with the float parameters A and B exchanged - the rectangle's and
   superellipse's `rotation ... [0, 90] exchange=width/height`; the pixel polish carries a point
-  stopped at one end to the other; tests/shaders checks it by rendering). Every parameter needs a
-  one-line help text.
+  stopped at one end to the other; tests/shaders checks it by rendering), `needs=G` (a dependency:
+  this float has no effect while the linear float G is at its minimum - the stripes'
+  `wave_frequency ... needs=wave`; the polish of a clean pattern scans the two jointly, since one
+  at a time neither leaves straight stripes; tests/shaders checks it by rendering). Every parameter
+  needs a one-line help text.
 - `p` is the texture coordinate (the image height spans 1 unit, y down), `fw` the pixel footprint
   in texture units (filter with it: `pt_filtered_step`, `pt_coverage`, fractal sums take it),
   `seed` the texture's seed (all randomness must come from the `pt_hash*` functions with it).

@@ -192,6 +192,10 @@ constexpr long kScanRefineEvaluations = 120;
 // continuous scalar at this many values (refine.h scan_discrete_pairs; a star's points: 10 x 16 x 4).
 constexpr int kPairMaxLevels = 16;
 constexpr int kPairLevels = 16;
+// Both magnitude scans also sweep each declared dependency (`needs=`) jointly: the gate at this many
+// values above its minimum times the dependent parameter at kScanLevels (refine.h
+// scan_dependent_pairs; the stripes' wave x wave frequency: 8 x 48).
+constexpr int kDependentGateLevels = 8;
 constexpr long kSettleEvaluations = 80;
 // An unrefined finalist (one that cannot win the final choice on log S + log P) is refined after
 // all when its similarity times this reaches kOutclassedRatio times the choice's: the most that
@@ -323,14 +327,20 @@ nlohmann::json scan_pattern(Objective& objective, RefineResult& r, RefineOptions
       if (count.levels && count.levels <= kPairMaxLevels)
         for (const auto& d : dims)
           if (!d.levels && d.param->type == ParamType::Float) pair_renders += long(count.levels) * kPairLevels;
-  const long scan_budget =
-      kScanLevels * kScanRounds * long(objective.space().dimensions()) + pair_renders + kScanRefineEvaluations;
+  const long dependent_renders = dependent_pair_renders(objective.space(), kDependentGateLevels, kScanLevels);
+  const long scan_budget = kScanLevels * kScanRounds * long(objective.space().dimensions()) + pair_renders +
+                           dependent_renders + kScanRefineEvaluations;
   if ((stop && *stop) || (budget.max_evaluations > 0 && spent + objective.evaluations() + scan_budget > budget.max_evaluations))
     return nullptr;
   const long evaluations_before = objective.evaluations();
   objective.set_budget({evaluations_before + scan_budget, 0.0});
   auto scanned = scan_coordinates(objective, r.unit, kScanLevels, kScanRounds);
   nlohmann::json report = {{"before", r.similarity}, {"scanned", scanned.similarity}};
+  if (dependent_renders > 0) {
+    const auto dependent = scan_dependent_pairs(objective, scanned.unit, kDependentGateLevels, kScanLevels);
+    report["dependent"] = dependent.similarity;
+    if (dependent.similarity > scanned.similarity) scanned = dependent;
+  }
   if (pair_renders > 0) {
     const auto paired = scan_discrete_pairs(objective, scanned.unit, kPairMaxLevels, kPairLevels);
     report["pairs"] = paired.similarity;

@@ -29,8 +29,12 @@ namespace proctex::search {
 inline constexpr double kPixelPolishStartRmse = 0.05;
 // At the shader's own origin, after a least-squares colour fit, a start may be farther: only there
 // can the parameters be the target's, and a duty off by a quarter of its range moves the pattern's
-// phase (wavy stripes: RMS 0.076 at the origin, the truth one scan away).
-inline constexpr double kPixelPolishOriginStartRmse = 0.1;
+// phase (wavy stripes: RMS 0.076 at the origin, the truth one scan away). Fine stripes (43 across
+// 256 px) reach this step with their duty and softness unseen: the align stage's finest renders
+// are averaged by 2, which leaves a 3 px period nearly a sinusoid whatever its duty, so a start
+// at duty 0.75 and softness 1 for the target's 0.42 and 0.2 registers at RMS 0.118 at the origin
+// and polishes to 0.001 (at 0.1, session 21, it was left alone).
+inline constexpr double kPixelPolishOriginStartRmse = 0.15;
 // Both limits are also relative to the target's own contrast: a start is polished only if it is
 // closer than this share of a flat image's RMS (flat_rmse). On a faint target (dark blue stripes,
 // flat RMS 0.035) every wrong shader registers at the flat level, under the absolute limits, and

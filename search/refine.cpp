@@ -301,4 +301,44 @@ RefineResult scan_discrete_pairs(Objective& objective, std::vector<double> start
   return result;
 }
 
+namespace {
+
+// (gate, dependent) dimension indices of the searched floats declaring `needs=` a searched gate.
+std::vector<std::pair<size_t, size_t>> dependent_pairs(const ParameterSpace& space) {
+  const auto& dims = space.dims();
+  std::vector<std::pair<size_t, size_t>> pairs;
+  for (size_t j = 0; j < dims.size(); ++j) {
+    if (!is_continuous(dims[j]) || dims[j].param->needs.empty()) continue;
+    for (size_t i = 0; i < dims.size(); ++i)
+      if (is_continuous(dims[i]) && dims[i].param->name == dims[j].param->needs) pairs.push_back({i, j});
+  }
+  return pairs;
+}
+
+}  // namespace
+
+long dependent_pair_renders(const ParameterSpace& space, int gate_levels, int levels) {
+  return long(dependent_pairs(space).size()) * gate_levels * levels;
+}
+
+RefineResult scan_dependent_pairs(Objective& objective, std::vector<double> start, int gate_levels, int levels) {
+  const long first_evaluation = objective.evaluations();
+  RefineResult result = scan_start(objective, start);
+  for (const auto& [gate, dependent] : dependent_pairs(objective.space())) {
+    if (objective.exhausted()) break;
+    const auto from = result.unit;
+    std::vector<std::vector<double>> candidates;
+    for (int a = 1; a <= gate_levels; ++a)
+      for (int b = 0; b < levels; ++b) {
+        auto p = from;
+        p[gate] = double(a) / gate_levels;
+        p[dependent] = sweep_value(b, levels);
+        candidates.push_back(p);
+      }
+    move_to_best(objective, candidates, result);
+  }
+  result.evaluations = objective.evaluations() - first_evaluation;
+  return result;
+}
+
 }  // namespace proctex::search

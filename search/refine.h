@@ -57,4 +57,16 @@ RefineResult scan_coordinates(Objective& objective, std::vector<double> start, i
 // worse point than `start`.
 RefineResult scan_discrete_pairs(Objective& objective, std::vector<double> start, int max_discrete_levels, int levels);
 
+// For each searched float that declares `needs=G` (shaders/shader.h) with G searched too: the two
+// jointly, G at `gate_levels` values above its minimum (where the other has no effect) times the
+// other at `levels` values across its range, the rest held. A wave's frequency is invisible while
+// the wave is off and a wave at the wrong frequency mostly scores worse than none (stripes 43 with
+// a wave of 0.30 at 2.73 waves: the blurred magnitude's distance is below straight stripes' only
+// within about 0.3 of the frequency), so scans of one parameter at a time miss it. Never
+// returns a worse point than `start`. It needs the rest near the target: from stripes 0.9 degrees
+// off the target's angle the best grid point is a slow wave (1.5 waves) that mimics the turn.
+RefineResult scan_dependent_pairs(Objective& objective, std::vector<double> start, int gate_levels, int levels);
+// The renders scan_dependent_pairs spends in `space` (0 when nothing declares a dependency).
+long dependent_pair_renders(const ParameterSpace& space, int gate_levels, int levels);
+
 }  // namespace proctex::search

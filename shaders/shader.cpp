@@ -77,8 +77,14 @@ void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
           !std::regex_match(expr.substr(slash + 1), name_re))
         at.fail("exchange '" + expr + "': expected two parameter names, A/B");
       p.exchange = {expr.substr(0, slash), expr.substr(slash + 1)};
+    } else if (flag.starts_with("needs=")) {
+      // needs=G (checked against the other declarations in parse_shader)
+      p.needs = flag.substr(6);
+      if (!std::regex_match(p.needs, std::regex(R"([A-Za-z_]\w*)")))
+        at.fail("needs '" + p.needs + "': expected a parameter name");
     } else
-      at.fail("unknown flag '" + flag + "' (known: log, linear, fixed, search, period=P[/COUNT], exchange=A/B)");
+      at.fail("unknown flag '" + flag +
+              "' (known: log, linear, fixed, search, period=P[/COUNT], exchange=A/B, needs=G)");
   }
   p.help = m[2].str();
   if (p.help.empty()) at.fail("parameter '" + p.name + "' needs a one-line help text");
@@ -156,6 +162,8 @@ ParamDecl parse_param(const std::string& body, const LineError& at) {
     at.fail("period of '" + p.name + "': only a linear float parameter can be periodic");
   if (!p.exchange.empty() && (p.type != ParamType::Float || p.scale != Scale::Linear))
     at.fail("exchange of '" + p.name + "': only a linear float parameter can declare one");
+  if (!p.needs.empty() && p.type != ParamType::Float)
+    at.fail("needs of '" + p.name + "': only a float parameter can declare one");
   return p;
 }
 
@@ -281,6 +289,13 @@ ShaderDecl parse_shader(const std::string& path, const std::string& source) {
               "' must be two other float parameters here");
     if (a->min != b->min || a->max != b->max || a->scale != b->scale)
       at.fail("exchange of '" + p.name + "': '" + a->name + "' and '" + b->name + "' need the same range and scale");
+  }
+  for (const auto& p : decl.params) {
+    if (p.needs.empty()) continue;
+    const LineError at{path, p.line};
+    const ParamDecl* gate = decl.find(p.needs);
+    if (!gate || gate == &p || gate->type != ParamType::Float || gate->scale != Scale::Linear)
+      at.fail("needs of '" + p.name + "': '" + p.needs + "' must be another linear float parameter here");
   }
   for (const auto& p : decl.params) {
     if (p.period_per.empty()) continue;

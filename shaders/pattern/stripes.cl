@@ -4,7 +4,7 @@
 // @param float angle          = 0   [0, 180]         "Direction in degrees (0: vertical stripes)"
 // @param float softness       = 0   [0, 1]           "Edge softness (1: smooth sinusoid-like bands)"
 // @param float wave           = 0   [0, 1]           "Waviness: sideways displacement of the stripes"
-// @param float wave_frequency = 3   [1, 12]          "Waves along each stripe across the texture"
+// @param float wave_frequency = 3   [1, 12] needs=wave "Waves along each stripe across the texture"
 // @param color color_a        = (0.80, 0.10, 0.08)   "First colour (linear RGB)"
 // @param color color_b        = (0.90, 0.88, 0.80)   "Second colour (linear RGB)"
 

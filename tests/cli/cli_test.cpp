@@ -72,7 +72,7 @@ TEST_F(Cli, ShadersListAndShowAgree) {
 
 // A parameter's declared symmetry (shader.h: period, exchange) is what a shader author checks:
 // `shaders show` prints it in the table and in the JSON.
-TEST_F(Cli, ShadersShowTellsADeclaredSymmetry) {
+TEST_F(Cli, ShadersShowTellsADeclaredSymmetryOrDependency) {
   const auto human = run("shaders show superellipse");
   ASSERT_EQ(human.exit_code, 0) << human.err;
   EXPECT_NE(human.out.find("exchange width/height"), std::string::npos) << human.out;
@@ -83,6 +83,13 @@ TEST_F(Cli, ShadersShowTellsADeclaredSymmetry) {
     if (p["name"] == "rotation") EXPECT_EQ(p["exchange"], nlohmann::json({"width", "height"})) << p.dump();
     else EXPECT_FALSE(p.contains("exchange")) << p.dump();
   }
+  // A dependency, told the same way: what a shader author reads before wondering why a frequency
+  // does nothing.
+  EXPECT_NE(run("shaders show stripes").out.find("needs wave"), std::string::npos);
+  const auto stripes = nlohmann::json::parse(run("shaders show stripes --json").out);
+  for (const auto& p : stripes["params"])
+    if (p["name"] == "wave_frequency") EXPECT_EQ(p["needs"], "wave") << p.dump();
+    else EXPECT_FALSE(p.contains("needs")) << p.dump();
 }
 
 TEST_F(Cli, RendersInlineSpecAtRequestedSize) {

@@ -243,6 +243,27 @@ TEST(PixelPolish, ARingPolishedToATentFindsTheFlatTopOfTheTarget) {
   expect_polished_to_truth(renderer, c, target, start.truth);
 }
 
+// Fine wavy stripes (43 across 256 px): the align stage's finest renders are averaged by 2, which
+// leaves a 3 px period nearly a sinusoid whatever its duty, so it handed over duty 0.75 and softness
+// 1 in swapped colours for the target's 0.42 and 0.2 (match JSON of session 22). At the origin, after
+// the colour fit, that start is RMS 0.118 from the target - beyond the 0.1 the polish admitted before
+// - and polishes to 0.001.
+TEST(PixelPolish, FineStripesWithTheirDutyAndSoftnessUnseenArePolishedFromTheOrigin) {
+  Renderer renderer;
+  const Case c = make("stripes:stripes=43,angle=81.1469,duty=0.42196,softness=0.20113,wave=0.30271,"
+                      "wave_frequency=2.73295,color_a=(0.7211,0.7082,0.0542),color_b=(0.5247,0.2287,0.7181)");
+  const Image target = render(renderer, c, c.truth);
+  const Case start = make("stripes:stripes=43,angle=81.1484,duty=0.75,softness=1,wave=0.30266,wave_frequency=2.73295,"
+                          "color_a=(0.5374,0.2376,0.5811),color_b=(0.8478,1,0)");
+  nlohmann::json report;
+  const auto r = pixel_polish(*c.decl, start.truth, 1u, {}, target, renderer, kPixelPolishBudget, report);
+  ASSERT_GE(r.rmse, 0.0) << report.dump();
+  EXPECT_LT(r.rmse, 0.002) << report.dump();
+  EXPECT_LT(worst_unit_error(c, r.packed), 0.02) << report.dump();
+  EXPECT_EQ(r.dx, 0);
+  EXPECT_EQ(r.dy, 0);
+}
+
 TEST(PixelPolish, ASuperellipseTurnedByHalfItsRangeComesBack) {
   // A diamond-like superellipse (exponent 1.54) turned 52 degrees, found as a squarer one
   // (exponent 3.2) turned 10 degrees: each is the other turned 45 degrees to the eye, RMS 0.046,

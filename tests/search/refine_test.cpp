@@ -194,4 +194,57 @@ TEST(ScanDiscretePairs, FindsASoftStarsCountWhereNeitherSweepAloneDoes) {
   EXPECT_GT(paired.similarity, alone.similarity);
 }
 
+// Fine wavy stripes (43 across, a wave of 0.30 period at 2.73 waves; session 21's fresh benchmark
+// target 25, which ended straight): the stripes declare `wave_frequency ... needs=wave`. From
+// straight stripes the line scan misses the frequency - it does nothing while the wave is off, and
+// the wave scanned at the start's frequency ends at another waviness (0.57 waves at 1) - while the
+// joint scan of the declared pair lands in the truth's basin, from which the exact magnitude's
+// local search reaches it.
+TEST(ScanDependentPairs, FindsTheWaveOfStraightStripesWhereTheLineScanCannot) {
+  const std::string truth = "stripes:stripes=43,angle=81.1469,duty=0.42196,softness=0.20113,wave=0.30271,"
+                            "wave_frequency=2.73295";
+  Fixture f(truth);
+  const metrics::MagnitudeMetric magnitude(kResolution, 2.0);  // blurred by 2 bins, as match.cpp's coarse polish
+  const auto target = f.target_for(magnitude);
+  auto start = resolve(f.decl, parse_spec_argument(truth));
+  start[f.decl.find("wave")->offset] = 0.0f;
+  start[f.decl.find("wave_frequency")->offset] = 1.0f;
+  std::vector<std::string> pinned;
+  for (const auto& p : f.decl.params)
+    if (p.name != "wave" && p.name != "wave_frequency") pinned.push_back(p.name);
+  const ParameterSpace space(f.decl, start, pinned);
+  ASSERT_EQ(space.dimensions(), 2);
+  EXPECT_EQ(dependent_pair_renders(space, 8, 48), 8 * 48);
+  const auto value = [&](const RefineResult& r, const std::string& name) {
+    return space.to_packed(r.unit)[f.decl.find(name)->offset];
+  };
+
+  Objective line(space, target, magnitude, f.renderer, 0, kResolution);
+  const RefineResult lined = scan_coordinates(line, space.to_unit(start), 48, 2);
+  EXPECT_GT(std::fabs(value(lined, "wave_frequency") - 2.73f), 0.5f)
+      << "the line scan found the frequency; wave " << value(lined, "wave");
+
+  Objective joint(space, target, magnitude, f.renderer, 0, kResolution);
+  const RefineResult scanned = scan_dependent_pairs(joint, space.to_unit(start), 8, 48);
+  EXPECT_NEAR(value(scanned, "wave_frequency"), 2.73f, 0.3f);
+  EXPECT_GT(scanned.similarity, lined.similarity);
+  EXPECT_LE(scanned.evaluations, 1 + 8 * 48);
+  const metrics::MagnitudeMetric exact(kResolution);
+  const auto exact_target = f.target_for(exact);
+  Objective exact_objective(space, exact_target, exact, f.renderer, 0, kResolution);
+  const RefineResult refined = refine(exact_objective, scanned.unit, {});
+  EXPECT_NEAR(value(refined, "wave_frequency"), 2.733f, 0.02f * 11);
+  EXPECT_NEAR(value(refined, "wave"), 0.303f, 0.02f);
+}
+
+// Nothing declared, nothing spent: a shader without `needs=` gets no joint scan.
+TEST(ScanDependentPairs, CostsNothingWithoutADeclaration) {
+  Fixture f("checker:squares=5");
+  EXPECT_EQ(dependent_pair_renders(f.space, 8, 48), 0);
+  Objective objective(f.space, f.target, metrics::default_metric(), f.renderer, 0, kResolution);
+  const std::vector<double> start(f.space.dimensions(), 0.3);
+  const RefineResult r = scan_dependent_pairs(objective, start, 8, 48);
+  EXPECT_EQ(r.evaluations, 1);
+}
+
 }  // namespace proctex::search

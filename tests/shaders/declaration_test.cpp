@@ -109,7 +109,11 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"// @param float a = 1 [0, 2] exchange=ok/nothing \"h\"", 3, "two other float parameters"},
                       BadCase{"// @param float a = 1 [0, 2] exchange=ok/a \"h\"", 3, "two other float parameters"},
                       BadCase{"// @param float a = 1 [0, 2] exchange=ok/ok \"h\"", 3, "two other float parameters"},
-                      BadCase{"// @param int a = 1 [0, 2] exchange=ok/ok \"h\"", 3, "linear float"}));
+                      BadCase{"// @param int a = 1 [0, 2] exchange=ok/ok \"h\"", 3, "linear float"},
+                      BadCase{"// @param float a = 1 [0, 2] needs=1x \"h\"", 3, "expected a parameter name"},
+                      BadCase{"// @param float a = 1 [0, 2] needs=nothing \"h\"", 3, "another linear float"},
+                      BadCase{"// @param float a = 1 [0, 2] needs=a \"h\"", 3, "another linear float"},
+                      BadCase{"// @param int a = 1 [0, 2] needs=ok \"h\"", 3, "only a float"}));
 
 // A symmetry period is data (issue 12: a star turned by 360/n is the same star): constant or
 // divided by a count, read back per point; values are reduced into [min, min + period) and
@@ -168,6 +172,26 @@ TEST(Declaration, ExchangeNamesTwoFloatsOfOneRange) {
   for (const char* shape : {"rectangle", "superellipse"})
     EXPECT_EQ(ShaderLibrary::builtin().get(shape).find("rotation")->exchange,
               (std::vector<std::string>{"width", "height"})) << shape;
+}
+
+// A dependency (issue 12: a stripe's wave frequency does nothing while the wave is off) names
+// another linear float; the stripes declare it, and a log-scaled gate (whose minimum is not "off")
+// is refused.
+TEST(Declaration, NeedsNamesTheFloatThatSwitchesAParameterOn) {
+  const std::string head = "// @shader \"x\"\n// @param float amp = 0 [0, 1] \"a\"\n";
+  const std::string shade = "float3 shade(float2 p, float fw, uint seed, const Params P) { return 0; }\n";
+  const ShaderDecl d = parse_shader("shaders/test/nd.cl", head + "// @param float f = 3 [1, 12] needs=amp \"f\"\n" + shade);
+  EXPECT_EQ(d.find("f")->needs, "amp");
+  EXPECT_TRUE(d.find("amp")->needs.empty());
+  try {
+    parse_shader("shaders/test/nd.cl", "// @shader \"x\"\n// @param float amp = 1 [0.1, 1] log \"a\"\n"
+                                       "// @param float f = 3 [1, 12] needs=amp \"f\"\n" + shade);
+    FAIL() << "accepted a log-scaled gate";
+  } catch (const Error& e) {
+    EXPECT_NE(e.message().find("shaders/test/nd.cl:3"), std::string::npos) << e.message();
+    EXPECT_NE(e.message().find("linear float"), std::string::npos) << e.message();
+  }
+  EXPECT_EQ(ShaderLibrary::builtin().get("stripes").find("wave_frequency")->needs, "wave");
 }
 
 TEST(Declaration, MissingShaderLineIsAnError) {

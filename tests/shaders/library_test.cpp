@@ -216,6 +216,31 @@ TEST_P(EveryShader, DeclaredExchangesRenderTheSameImage) {
   }
 }
 
+// A declared dependency holds: with its gate at the minimum the parameter changes nothing, and
+// with the gate on it does (the search scans the two jointly because of it).
+TEST_P(EveryShader, DeclaredDependenciesDoNothingWhileTheGateIsOff) {
+  const ShaderDecl& d = decl();
+  RenderSettings s;
+  s.width = s.height = 128;
+  for (const auto& p : d.params) {
+    if (p.needs.empty()) continue;
+    const ParamDecl& gate = *d.find(p.needs);
+    for (auto packed : random_vectors(d, 6)) {
+      packed[gate.offset] = gate.min;
+      packed[p.offset] = p.min + 0.2f * (p.max - p.min);
+      auto moved = packed;
+      moved[p.offset] = p.min + 0.7f * (p.max - p.min);
+      auto on = packed, on_moved = moved;
+      on[gate.offset] = on_moved[gate.offset] = gate.min + 0.5f * (gate.max - gate.min);
+      const auto images = renderer.render_batch(d, {packed, moved, on, on_moved}, {3u, 3u, 3u, 3u}, s);
+      EXPECT_LT(rms_difference(images[0], images[1]), 1e-5) << p.name << " moved with " << gate.name << " off, at "
+                                                            << describe(d, packed);
+      EXPECT_GT(rms_difference(images[2], images[3]), 0.005) << p.name << " moved with " << gate.name << " on, at "
+                                                             << describe(d, on);
+    }
+  }
+}
+
 // Mean absolute difference in sRGB units between a 256^2 render and a 1024^2 render box-reduced to
 // 256^2 (the reference: 16 samples per pixel). Tolerance 0.02 = about 5 of 255 sRGB levels on
 // average: invisible in side-by-side viewing, while point-sampled edges and noise octaves finer
