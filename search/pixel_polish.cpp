@@ -253,12 +253,70 @@ std::pair<std::vector<float>, double> polish_start(const ShaderDecl& decl, const
   return {end, end_rmse};
 }
 
+// The count hop: the polish keeps counts, and a small spiky star (50 px across) polished with 3
+// points for the target's 6 stays there (RMS 0.011; synthetic target 43 of session 21, answered
+// with 7). For each count that divides a searched rotation's declared period (shader.h
+// `period=P/COUNT`), every other count of its range with the rotation at kHopCountPhases phases of
+// the new period (the found rotation fits the new count's points only by chance) is judged after a
+// least-squares colour fit (the colours + 1 renders each: 162 renders for a star); the closest gets
+// a hop's local search (the star: 6 points at RMS 0.0005, polished to 1e-5). Returns whether it
+// landed lower than `best`.
+bool hop_counts(const ShaderDecl& decl, uint32_t seed, const std::vector<std::string>& pinned,
+                const std::vector<std::string>& kept, const Image& target, Renderer& renderer, long max_evaluations,
+                PixelPolishResult& best, nlohmann::json& hops) {
+  const auto is_pinned = [&](const std::string& n) { return std::find(pinned.begin(), pinned.end(), n) != pinned.end(); };
+  std::vector<uint8_t> mask;
+  const auto wanted = metrics::moved_target(target, best.dx, best.dy, mask);
+  bool lower = false;
+  for (const auto& rotation : decl.params) {
+    if (rotation.period_per.empty() || is_pinned(rotation.name) || is_pinned(rotation.period_per)) continue;
+    const ParamDecl& count = *decl.find(rotation.period_per);
+    const int n = static_cast<int>(std::lround(best.packed[count.offset]));
+    std::vector<float> closest;
+    double closest_mse = 0.0;
+    for (int m = static_cast<int>(count.min); m <= static_cast<int>(count.max); ++m) {
+      if (m == n) continue;
+      for (int k = 0; k < kHopCountPhases; ++k) {
+        if (max_evaluations - best.evaluations < kHopEvaluations) return lower;
+        std::vector<float> moved = best.packed;
+        moved[count.offset] = static_cast<float>(m);
+        moved[rotation.offset] += static_cast<float>(k * rotation.period / m / kHopCountPhases);
+        moved = canonical_packed(decl, moved);
+        const auto fit = fit_colours_to_pixels(decl, moved, seed, pinned, wanted, mask, target.width, renderer,
+                                               ColourBounds::Bounded);
+        best.evaluations += fit.renders;
+        if (closest.empty() || fit.mse < closest_mse) {
+          closest = fit.packed;
+          closest_mse = fit.mse;
+        }
+      }
+    }
+    if (closest.empty() || max_evaluations - best.evaluations < kHopEvaluations) continue;
+    nlohmann::json entry = {{"count", count.name},
+                            {"to", std::lround(closest[count.offset])},
+                            {"rmse_before", std::sqrt(closest_mse)}};
+    long used = 0;
+    const auto [end, rmse] = polish_start(decl, closest, seed, pinned, kept, target, best.dx, best.dy, renderer,
+                                          kHopEvaluations, used, entry, false);
+    best.evaluations += used;
+    entry["rmse_after"] = rmse;
+    hops.push_back(entry);
+    if (rmse < best.rmse) {
+      best.packed = end;
+      best.rmse = rmse;
+      lower = true;
+    }
+  }
+  return lower;
+}
+
 // Basin hopping: a polished point that still misses the target's pixels sits in a local minimum
 // of their difference, one the starts above do not leave - a superellipse turned 45 degrees with its
 // exponent traded for the turn (RMS 0.046); a soft ring polished to a tent, its blur wider than its
 // band, where the target's band has a flat top (RMS 0.009; every point on the straight line to the
 // truth is worse until the regime changes). Each hop moves the shape parameters and gives the move
-// a short local search; a move that ends lower becomes the point the next hop leaves from. First a
+// a short local search; a move that ends lower becomes the point the next hop leaves from. First
+// every other value of a count that divides a rotation's period (hop_counts), then a
 // parameter stopped at an end of its range is carried across a declared exchange (shader.h), then
 // each parameter alone goes to the other half of its range (half a turn of a rotation), then all of
 // them at random within a radius that grows from hop to hop (a fixed seed: the same answer every run).
@@ -275,7 +333,8 @@ void hop_between_basins(const ShaderDecl& decl, uint32_t seed, const std::vector
   const auto uniform = [&] { return double(random()) / 4294967296.0; };
   static constexpr double kRadii[] = {0.05, 0.15, 0.3, 0.5};
   nlohmann::json hops = nlohmann::json::array();
-  bool hopped = false, continue_last = false;
+  bool hopped = hop_counts(decl, seed, pinned, kept, target, renderer, max_evaluations, best, hops);
+  bool continue_last = hopped;  // a count hop that landed lower is polished on first
   // Hops 0 .. dims-1: across a declared exchange (shader.h), then dims .. 2 dims-1: to the other
   // half, then at random. An exchange move that does not apply (the parameter away from its ends,
   // or an exchanged parameter pinned) is skipped without a render.

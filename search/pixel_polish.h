@@ -63,6 +63,10 @@ inline constexpr uint32_t kHopSeed = 12;
 // there: a superellipse 7 degrees from 0 was found turned 45 degrees from the target, and the
 // exchange hop spent the renders its half-turn hop needed (session 21).
 inline constexpr double kHopExchangeEnd = 0.02;
+// A count that divides a rotation's declared period (shader.h `period=P/COUNT`: a star's points)
+// is tried at every other value of its range by the first hop, the rotation at this many phases of
+// the new count's period, each judged after a least-squares colour fit; the closest is polished.
+inline constexpr int kHopCountPhases = 6;
 
 struct PixelPolishResult {
   std::vector<float> packed;

@@ -264,6 +264,29 @@ TEST(PixelPolish, FineStripesWithTheirDutyAndSoftnessUnseenArePolishedFromTheOri
   EXPECT_EQ(r.dy, 0);
 }
 
+// A small spiky star (50 px across, 6 points): the polish keeps counts, and a start with 3 points
+// (what the match handed over for session 21's synthetic target 43) polished to RMS 0.011 and stayed.
+// The count hop tries every other count at 6 phases of its rotation period and finds 6 points.
+TEST(PixelPolish, AStarPolishedWithTheWrongCountFindsItsPoints) {
+  Renderer renderer;
+  const Case c = make("star:points=6,size=0.19674,inner=0.11695,rotation=25.064,softness=0.06059,"
+                      "fg=(0.733,0.8273,0.3211),bg=(0.0961,0.6756,0.285)");
+  const Image target = render(renderer, c, c.truth);
+  const Case start = make("star:points=3,size=0.197,inner=0.123,rotation=145.054,softness=0.063,"
+                          "fg=(0.595,0.794,0.313),bg=(0.097,0.676,0.285)");
+  nlohmann::json report;
+  const auto r = pixel_polish(*c.decl, start.truth, 1u, {}, target, renderer, kPixelPolishBudget, report);
+  ASSERT_GE(r.rmse, 0.0) << report.dump();
+  EXPECT_EQ(r.packed[c.decl->find("points")->offset], 6.0f) << report.dump();
+  EXPECT_LT(r.rmse, 1e-3) << report.dump();
+  // The rotation compared modulo its period (60 degrees at 6 points), as the benchmark does.
+  const ParamDecl& rotation = *c.decl->find("rotation");
+  EXPECT_LT(parameter_difference(*c.decl, rotation, r.packed[rotation.offset], 25.064f, r.packed), 0.02 * 180)
+      << report.dump();
+  auto canonical = canonical_packed(*c.decl, r.packed);
+  EXPECT_LT(worst_unit_error(c, canonical), 0.02) << report.dump();
+}
+
 TEST(PixelPolish, ASuperellipseTurnedByHalfItsRangeComesBack) {
   // A diamond-like superellipse (exponent 1.54) turned 52 degrees, found as a squarer one
   // (exponent 3.2) turned 10 degrees: each is the other turned 45 degrees to the eye, RMS 0.046,
