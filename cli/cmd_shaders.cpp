@@ -166,10 +166,11 @@ float3 shade(float2 p, float fw, uint seed, const Params P) { ... }
   end renders as the other end with the float parameters A and B exchanged - the rectangle's and
   superellipse's `rotation ... [0, 90] exchange=width/height`; the pixel polish carries a point
   stopped at one end to the other; tests/shaders checks it by rendering), `needs=G` (a dependency:
-  this float has no effect while the linear float G is at its minimum - the stripes'
-  `wave_frequency ... needs=wave`; the polish of a clean pattern scans the two jointly, since one
-  at a time neither leaves straight stripes; tests/shaders checks it by rendering). Every parameter
-  needs a one-line help text.
+  this float or int has no effect while the linear float G is at its minimum - the stripes'
+  `wave_frequency ... needs=wave`, the grid's `subdivisions` and `minor_width ... needs=minor_strength`;
+  the polish of a clean pattern scans two floats jointly, since one at a time neither leaves
+  straight stripes, and an answer with G off reports the parameter at its default; tests/shaders
+  checks it by rendering). Every parameter needs a one-line help text.
 - `p` is the texture coordinate (the image height spans 1 unit, y down), `fw` the pixel footprint
   in texture units (filter with it: `pt_filtered_step`, `pt_coverage`, fractal sums take it),
   `seed` the texture's seed (all randomness must come from the `pt_hash*` functions with it).

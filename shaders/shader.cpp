@@ -162,8 +162,8 @@ ParamDecl parse_param(const std::string& body, const LineError& at) {
     at.fail("period of '" + p.name + "': only a linear float parameter can be periodic");
   if (!p.exchange.empty() && (p.type != ParamType::Float || p.scale != Scale::Linear))
     at.fail("exchange of '" + p.name + "': only a linear float parameter can declare one");
-  if (!p.needs.empty() && p.type != ParamType::Float)
-    at.fail("needs of '" + p.name + "': only a float parameter can declare one");
+  if (!p.needs.empty() && p.type != ParamType::Float && p.type != ParamType::Int)
+    at.fail("needs of '" + p.name + "': only a float or int parameter can declare one");
   return p;
 }
 
@@ -231,6 +231,13 @@ std::vector<float> canonical_packed(const ShaderDecl& decl, std::vector<float> p
     // A value a rounding error below a whole period reads as the period's start.
     if (period - r < 1e-6 * period) r = 0.0;
     v = static_cast<float>(std::clamp(p.min + r, double(p.min), double(p.max)));
+  }
+  // A parameter whose declared gate is off does nothing: it reads as its default (a grid without
+  // minor lines has subdivisions 1, however many the search left at minor strength 0).
+  for (const auto& p : decl.params) {
+    const ParamDecl* gate = p.needs.empty() ? nullptr : decl.find(p.needs);
+    if (!gate || gate->offset >= static_cast<int>(packed.size()) || p.offset >= static_cast<int>(packed.size())) continue;
+    if (packed[gate->offset] <= gate->min) packed[p.offset] = p.default_value[0];
   }
   return packed;
 }

@@ -17,9 +17,10 @@
 // value at the other end with the float parameters A and B exchanged - a shape symmetric under a
 // half turn, turned through a quarter turn, trades its width for its height):
 //   // @param float rotation = 0 [0, 90] exchange=width/height "Rotation in degrees"
-// `needs=G` (a dependency: this float has no effect while the linear float G is at its range's
-// minimum - a wave's frequency while the wave's amplitude is 0 - so a search that scans one
-// parameter at a time cannot find it from a point where G is off; it scans the two jointly):
+// `needs=G` (a dependency: this float or int has no effect while the linear float G is at its
+// range's minimum - a wave's frequency while the wave's amplitude is 0 - so a search that scans one
+// parameter at a time cannot find it from a point where G is off; it scans the two floats jointly,
+// and an answer with G off reports the parameter at its default):
 //   // @param float wave_frequency = 3 [1, 12] needs=wave "Waves along each stripe"
 // Colours range over [0, 1] per channel unless a range is given.
 #include <optional>
@@ -54,9 +55,10 @@ struct ParamDecl {
   // with A and B (floats of one range) exchanged. Empty: none declared. The pixel polish moves a
   // point stuck at one end to the other this way (search/pixel_polish.cpp).
   std::vector<std::string> exchange;
-  // Flag `needs=G` (floats only): this parameter renders nothing different while the linear float
-  // G is at its minimum. Empty: none declared. The deterministic polish scans the two jointly
-  // (search/match.cpp scan_pattern).
+  // Flag `needs=G` (floats and ints): this parameter renders nothing different while the linear
+  // float G is at its minimum. Empty: none declared. The deterministic polish scans two floats
+  // jointly (search/match.cpp scan_pattern); canonical_packed sets the parameter to its default
+  // while G is at its minimum.
   std::string needs;
   int line = 0;    // line of the declaration in the shader file
   int offset = 0;  // first float of this parameter in the packed vector
@@ -87,8 +89,9 @@ ShaderDecl parse_shader(const std::string& path, const std::string& source);
 // its `period_per` count), or 0 when `p` declares none.
 double symmetry_period(const ShaderDecl& decl, const ParamDecl& p, const std::vector<float>& packed);
 
-// `packed` with every periodic parameter reduced into [min, min + period): the one value of each
-// class of equivalent values that the matcher reports (the same image, by the declaration).
+// `packed` with every periodic parameter reduced into [min, min + period) and every parameter whose
+// declared gate (`needs=`) is at its minimum at its default: the one value of each class of
+// equivalent values that the matcher reports (the same image, by the declaration).
 std::vector<float> canonical_packed(const ShaderDecl& decl, std::vector<float> packed);
 
 // |a - b| for the parameter `p` (packed values), taken modulo its symmetry period at the point

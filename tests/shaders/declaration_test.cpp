@@ -113,7 +113,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"// @param float a = 1 [0, 2] needs=1x \"h\"", 3, "expected a parameter name"},
                       BadCase{"// @param float a = 1 [0, 2] needs=nothing \"h\"", 3, "another linear float"},
                       BadCase{"// @param float a = 1 [0, 2] needs=a \"h\"", 3, "another linear float"},
-                      BadCase{"// @param int a = 1 [0, 2] needs=ok \"h\"", 3, "only a float"}));
+                      BadCase{"// @param bool a = false needs=ok \"h\"", 3, "only a float or int"}));
 
 // A symmetry period is data (issue 12: a star turned by 360/n is the same star): constant or
 // divided by a count, read back per point; values are reduced into [min, min + period) and
@@ -192,6 +192,26 @@ TEST(Declaration, NeedsNamesTheFloatThatSwitchesAParameterOn) {
     EXPECT_NE(e.message().find("linear float"), std::string::npos) << e.message();
   }
   EXPECT_EQ(ShaderLibrary::builtin().get("stripes").find("wave_frequency")->needs, "wave");
+  EXPECT_EQ(ShaderLibrary::builtin().get("grid").find("subdivisions")->needs, "minor_strength");
+}
+
+// An answer whose gate is off reports what it does not use at its default, as a period reports its
+// canonical value: a grid found with 8 subdivisions at minor strength 0 (session 21's benchmark
+// target 4, whose own subdivisions are 1) is the grid without minor lines, subdivisions 1.
+TEST(Declaration, AParameterWhoseGateIsOffReadsAsItsDefault) {
+  const ShaderDecl& grid = ShaderLibrary::builtin().get("grid");
+  auto packed = grid.default_packed();
+  const auto at = [&](const char* name) -> float& { return packed[grid.find(name)->offset]; };
+  at("subdivisions") = 8;
+  at("minor_width") = 0.839f;
+  at("minor_strength") = 0.0f;
+  auto canonical = canonical_packed(grid, packed);
+  EXPECT_EQ(canonical[grid.find("subdivisions")->offset], 1.0f);
+  EXPECT_EQ(canonical[grid.find("minor_width")->offset], grid.find("minor_width")->default_value[0]);
+  at("minor_strength") = 0.01f;  // on, however faint: kept
+  canonical = canonical_packed(grid, packed);
+  EXPECT_EQ(canonical[grid.find("subdivisions")->offset], 8.0f);
+  EXPECT_EQ(canonical[grid.find("minor_width")->offset], 0.839f);
 }
 
 TEST(Declaration, MissingShaderLineIsAnError) {

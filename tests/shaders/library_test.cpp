@@ -217,7 +217,8 @@ TEST_P(EveryShader, DeclaredExchangesRenderTheSameImage) {
 }
 
 // A declared dependency holds: with its gate at the minimum the parameter changes nothing, and
-// with the gate on it does (the search scans the two jointly because of it).
+// with the gate on it does somewhere (the search scans the two jointly because of it, and an answer
+// reports it at its default while the gate is off).
 TEST_P(EveryShader, DeclaredDependenciesDoNothingWhileTheGateIsOff) {
   const ShaderDecl& d = decl();
   RenderSettings s;
@@ -225,19 +226,25 @@ TEST_P(EveryShader, DeclaredDependenciesDoNothingWhileTheGateIsOff) {
   for (const auto& p : d.params) {
     if (p.needs.empty()) continue;
     const ParamDecl& gate = *d.find(p.needs);
+    int differs_on = 0;
     for (auto packed : random_vectors(d, 6)) {
+      const auto value_at = [&](float share) {  // an int at a whole value
+        const float v = p.min + share * (p.max - p.min);
+        return p.type == proctex::ParamType::Int ? std::round(v) : v;
+      };
       packed[gate.offset] = gate.min;
-      packed[p.offset] = p.min + 0.2f * (p.max - p.min);
+      packed[p.offset] = value_at(0.2f);
       auto moved = packed;
-      moved[p.offset] = p.min + 0.7f * (p.max - p.min);
+      moved[p.offset] = value_at(0.7f);
       auto on = packed, on_moved = moved;
       on[gate.offset] = on_moved[gate.offset] = gate.min + 0.5f * (gate.max - gate.min);
       const auto images = renderer.render_batch(d, {packed, moved, on, on_moved}, {3u, 3u, 3u, 3u}, s);
       EXPECT_LT(rms_difference(images[0], images[1]), 1e-5) << p.name << " moved with " << gate.name << " off, at "
                                                             << describe(d, packed);
-      EXPECT_GT(rms_difference(images[2], images[3]), 0.005) << p.name << " moved with " << gate.name << " on, at "
-                                                             << describe(d, on);
+      if (rms_difference(images[2], images[3]) > 0.005) ++differs_on;
     }
+    // Not at every point (a grid's minor width also needs subdivisions > 1), but somewhere.
+    EXPECT_GT(differs_on, 0) << p.name << " changed nothing with " << gate.name << " on at 6 random points";
   }
 }
 
