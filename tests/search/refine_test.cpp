@@ -114,26 +114,45 @@ TEST(Refine, EveryOptimizerImprovesOnItsStart) {
 
 namespace proctex::search {
 
+// Stripes with only `wave` and `wave_frequency` searched: the truth's other parameters pinned, the
+// search starting from the truth with the wave and frequency given.
+struct WaveSearch {
+  Fixture f;
+  ParameterSpace space;
+  std::vector<float> start;
+  WaveSearch(const std::string& truth, float wave, float frequency)
+      : f(truth), space(f.decl, start_of(f, truth, wave, frequency), others(f)),
+        start(start_of(f, truth, wave, frequency)) {}
+  static std::vector<float> start_of(const Fixture& f, const std::string& truth, float wave, float frequency) {
+    auto s = resolve(f.decl, parse_spec_argument(truth));
+    s[f.decl.find("wave")->offset] = wave;
+    s[f.decl.find("wave_frequency")->offset] = frequency;
+    return s;
+  }
+  static std::vector<std::string> others(const Fixture& f) {
+    std::vector<std::string> pinned;
+    for (const auto& p : f.decl.params)
+      if (p.name != "wave" && p.name != "wave_frequency") pinned.push_back(p.name);
+    return pinned;
+  }
+  float value(const RefineResult& r, const std::string& name) const {
+    return space.to_packed(r.unit)[f.decl.find(name)->offset];
+  }
+};
+
 TEST(ScanCoordinates, FindsAStripePatternsWavinessWhereTheLocalSearchStops) {
   // Wavy stripes (a deterministic benchmark target): the waviness shows in the Fourier magnitude
   // (blurred, as the coarse polish compares it) as sidebands that meet the target's only near the
   // true wave frequency, so a local search from strongly waved stripes at the wrong frequency
   // stays there. A line scan across each parameter's whole range finds the sidebands.
-  const std::string truth = "stripes:stripes=52,angle=52,duty=0.26,softness=0.88,wave=0.3,wave_frequency=2.76";
-  Fixture f(truth);
+  WaveSearch w("stripes:stripes=52,angle=52,duty=0.26,softness=0.88,wave=0.3,wave_frequency=2.76", 0.9f, 1.0f);
+  Fixture& f = w.f;
+  const ParameterSpace& space = w.space;
+  const auto& start = w.start;
+  const auto value = [&](const RefineResult& r, const std::string& name) { return w.value(r, name); };
   const metrics::MagnitudeMetric magnitude(kResolution, 2.0);  // blurred by 2 bins, as match.cpp's coarse polish
   const auto target = f.target_for(magnitude);
-  auto start = resolve(f.decl, parse_spec_argument(truth));
-  start[f.decl.find("wave")->offset] = 0.9f;
-  start[f.decl.find("wave_frequency")->offset] = 1.0f;
-  std::vector<std::string> pinned;
-  for (const auto& p : f.decl.params)
-    if (p.name != "wave" && p.name != "wave_frequency") pinned.push_back(p.name);
-  const ParameterSpace space(f.decl, start, pinned);
   ASSERT_EQ(space.dimensions(), 2);
-  const auto value = [&](const RefineResult& r, const std::string& name) {
-    return space.to_packed(r.unit)[f.decl.find(name)->offset];
-  };
 
   Objective local(space, target, magnitude, f.renderer, 0, kResolution);
   const RefineResult stuck = refine(local, space.to_unit(start), {});
@@ -201,23 +220,16 @@ TEST(ScanDiscretePairs, FindsASoftStarsCountWhereNeitherSweepAloneDoes) {
 // joint scan of the declared pair lands in the truth's basin, from which the exact magnitude's
 // local search reaches it.
 TEST(ScanDependentPairs, FindsTheWaveOfStraightStripesWhereTheLineScanCannot) {
-  const std::string truth = "stripes:stripes=43,angle=81.1469,duty=0.42196,softness=0.20113,wave=0.30271,"
-                            "wave_frequency=2.73295";
-  Fixture f(truth);
+  WaveSearch w("stripes:stripes=43,angle=81.1469,duty=0.42196,softness=0.20113,wave=0.30271,wave_frequency=2.73295",
+               0.0f, 1.0f);
+  Fixture& f = w.f;
+  const ParameterSpace& space = w.space;
+  const auto& start = w.start;
+  const auto value = [&](const RefineResult& r, const std::string& name) { return w.value(r, name); };
   const metrics::MagnitudeMetric magnitude(kResolution, 2.0);  // blurred by 2 bins, as match.cpp's coarse polish
   const auto target = f.target_for(magnitude);
-  auto start = resolve(f.decl, parse_spec_argument(truth));
-  start[f.decl.find("wave")->offset] = 0.0f;
-  start[f.decl.find("wave_frequency")->offset] = 1.0f;
-  std::vector<std::string> pinned;
-  for (const auto& p : f.decl.params)
-    if (p.name != "wave" && p.name != "wave_frequency") pinned.push_back(p.name);
-  const ParameterSpace space(f.decl, start, pinned);
   ASSERT_EQ(space.dimensions(), 2);
   EXPECT_EQ(dependent_pair_renders(space, 8, 48), 8 * 48);
-  const auto value = [&](const RefineResult& r, const std::string& name) {
-    return space.to_packed(r.unit)[f.decl.find(name)->offset];
-  };
 
   Objective line(space, target, magnitude, f.renderer, 0, kResolution);
   const RefineResult lined = scan_coordinates(line, space.to_unit(start), 48, 2);
