@@ -269,8 +269,11 @@ bool hop_counts(const ShaderDecl& decl, uint32_t seed, const std::vector<std::st
   const auto wanted = metrics::moved_target(target, best.dx, best.dy, mask);
   bool lower = false;
   for (const auto& rotation : decl.params) {
-    if (rotation.period_per.empty() || is_pinned(rotation.name) || is_pinned(rotation.period_per)) continue;
+    if (rotation.period_per.empty() || !rotation.searchable || is_pinned(rotation.name) ||
+        is_pinned(rotation.period_per))
+      continue;
     const ParamDecl& count = *decl.find(rotation.period_per);
+    if (!count.searchable) continue;
     const int n = static_cast<int>(std::lround(best.packed[count.offset]));
     std::vector<float> closest;
     double closest_mse = 0.0;

@@ -45,6 +45,12 @@ std::vector<std::string> split_list(const std::string& text) {
   return out;
 }
 
+// A parameter or enum value name, as the generated OpenCL struct and constants need it.
+bool is_identifier(const std::string& text) {
+  static const std::regex identifier(R"([A-Za-z_]\w*)");
+  return std::regex_match(text, identifier);
+}
+
 // Flags and help text that follow the default/range: `log fixed "help"`.
 void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
   static const std::regex tail_re(R"(^\s*((?:[a-z]+(?:=[^\s"]+)?\s+)*)\"(.*)\"\s*$)");
@@ -64,7 +70,7 @@ void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
       p.period = parse_number(expr.substr(0, slash), at, "period");
       if (slash != std::string::npos) {
         p.period_per = trim(expr.substr(slash + 1));
-        if (!std::regex_match(p.period_per, std::regex(R"([A-Za-z_]\w*)")))
+        if (!is_identifier(p.period_per))
           at.fail("period '" + expr + "': expected a number or NUMBER/COUNT_PARAMETER");
       }
       if (!(p.period > 0.0f)) at.fail("period of '" + p.name + "' must be positive");
@@ -72,15 +78,13 @@ void parse_tail(const std::string& tail, ParamDecl& p, const LineError& at) {
       // exchange=A/B (checked against the other declarations in parse_shader)
       const std::string expr = flag.substr(9);
       const auto slash = expr.find('/');
-      static const std::regex name_re(R"([A-Za-z_]\w*)");
-      if (slash == std::string::npos || !std::regex_match(expr.substr(0, slash), name_re) ||
-          !std::regex_match(expr.substr(slash + 1), name_re))
+      if (slash == std::string::npos || !is_identifier(expr.substr(0, slash)) || !is_identifier(expr.substr(slash + 1)))
         at.fail("exchange '" + expr + "': expected two parameter names, A/B");
       p.exchange = {expr.substr(0, slash), expr.substr(slash + 1)};
     } else if (flag.starts_with("needs=")) {
       // needs=G (checked against the other declarations in parse_shader)
       p.needs = flag.substr(6);
-      if (!std::regex_match(p.needs, std::regex(R"([A-Za-z_]\w*)")))
+      if (!is_identifier(p.needs))
         at.fail("needs '" + p.needs + "': expected a parameter name");
     } else
       at.fail("unknown flag '" + flag +
@@ -146,7 +150,7 @@ ParamDecl parse_param(const std::string& body, const LineError& at) {
     if (p.enum_values.size() < 2) at.fail("enum '" + p.name + "' needs at least two values");
     std::set<std::string> seen;
     for (const auto& v : p.enum_values) {
-      if (!std::regex_match(v, std::regex(R"([A-Za-z_]\w*)"))) at.fail("enum value '" + v + "' is not an identifier");
+      if (!is_identifier(v)) at.fail("enum value '" + v + "' is not an identifier");
       if (!seen.insert(v).second) at.fail("enum value '" + v + "' repeats");
     }
     const auto it = std::find(p.enum_values.begin(), p.enum_values.end(), r[1].str());
