@@ -65,6 +65,10 @@ std::string next_step(const search::MatchResult& r, const std::string& photo) {
   if (r.verdict == "good")
     return fmt::format("next: render it at any size: proctex render SPEC.json -o big.png --size 4096 "
                        "(the material is {:.0f}% likely by the selection)", 100 * r.probability);
+  if (r.verdict == "approximate" && r.similarity < search::kApproximateMatch)
+    return fmt::format("next: {} draws the same kind of pattern with its details off (compare with --compare side.png); "
+                       "pin what you can read off the photo with --fix name=value (proctex shaders show {}) and match again",
+                       r.spec.shader, r.spec.shader);
   if (r.verdict == "approximate")
     return fmt::format("next: the material is uncertain ({} at {:.0f}%); compare with --compare side.png, try the "
                        "other likely materials with --shaders {}, or crop a clean region with --crop x,y,w,h",
@@ -167,6 +171,11 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   if (result.pixel_exact)
     std::printf("%s: %s (%s: pixel-exact, RGB RMS difference %.4f; statistical similarity %.3f)\n", o.photo.c_str(),
                 result.spec.shader.c_str(), result.verdict.c_str(), result.image_rmse, shown(result.similarity, 3));
+  else if (result.verdict == "approximate" && result.similarity < search::kApproximateMatch)
+    std::printf("%s: %s (similarity %.3f, %s: the same kind of pattern, %.3f without the spectrum, whose peaks "
+                "sit elsewhere)\n",
+                o.photo.c_str(), result.spec.shader.c_str(), shown(result.similarity, 3), result.verdict.c_str(),
+                shown(result.pattern_similarity, 3));
   else
     std::printf("%s: %s (similarity %.3f, %s)\n", o.photo.c_str(), result.spec.shader.c_str(),
                 shown(result.similarity, 3), result.verdict.c_str());
@@ -192,7 +201,9 @@ void add_match_command(CLI::App& app, GlobalOptions& global) {
       "shaders, refines the best starts with NLopt (and polishes clean patterns exactly), and keeps the\n"
       "result that is both similar and a likely material.\n"
       "Verdict: good (similarity >= 0.5 and the material at least 95% likely, or similarity >= 0.75),\n"
-      "approximate (>= 0.25), no-match (no shader expresses the photo). See docs/search.md.\n"
+      "approximate (>= 0.25; on a clean pattern also >= 0.25 without the spectrum, which rates a pattern\n"
+      "whose peaks sit a few frequency bins off as unrelated), no-match (no shader expresses the photo).\n"
+      "See docs/search.md.\n"
       "  proctex match brick.png --render match.png --size 4096 --compare cmp.png\n"
       "  proctex match wall.jpg --shaders bricks,tiles --fix rows=8 --budget 20s -o result.json\n"
       "Ctrl-C stops the search and returns the best match so far.");

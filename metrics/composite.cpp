@@ -1,9 +1,11 @@
 #include "metrics/composite.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <span>
+#include <string>
 
 #include "core/error.h"
 #include "core/parallel.h"
@@ -227,6 +229,28 @@ std::vector<std::pair<std::string, double>> CompositeMetric::breakdown(
                      components_[i].metric->similarity(slice(a, i), slice(b, i)));
   }
   return out;
+}
+
+double CompositeMetric::similarity_without(std::span<const float> a, std::span<const float> b,
+                                           std::string_view left_out) const {
+  if (a.size() != size_ || b.size() != size_) {
+    throw Error("composite feature vectors have the wrong length", "recompute the features");
+  }
+  bool known = false;
+  double log_s = 0.0, weight = 0.0;
+  for (std::size_t i = 0; i < components_.size(); ++i) {
+    const Component& c = components_[i];
+    if (c.metric->id() == left_out) {
+      known = true;
+      continue;
+    }
+    if (c.weight <= 0) continue;
+    log_s += c.weight * std::log(std::max(c.metric->similarity(slice(a, i), slice(b, i)), 1e-300));
+    weight += c.weight;
+  }
+  if (!known) throw Error("the composite metric has no component '" + std::string(left_out) + "'", "name one of its components");
+  if (weight <= 0) throw Error("no weighted component is left without '" + std::string(left_out) + "'", "leave out another component");
+  return std::exp(log_s / weight);
 }
 
 }  // namespace proctex::metrics

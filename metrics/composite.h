@@ -20,6 +20,7 @@
 // Version = 100 * own layout version + sum of the components' versions, so bumping any component
 // makes cached composite features stale too.
 #include <memory>
+#include <string_view>
 #include <utility>
 
 #include "metrics/metric.h"
@@ -74,6 +75,11 @@ class CompositeMetric final : public Metric {
   // (component id, similarity) for each component, from composite feature vectors.
   std::vector<std::pair<std::string, double>> breakdown(std::span<const float> a,
                                                         std::span<const float> b) const;
+  // The product-form similarity of the other components, their weights renormalised to sum 1:
+  // what the composite says with one kind of evidence left out (the colour, for samples whose
+  // colours are random; the spectrum, for clean patterns whose peaks it demands in the very bins).
+  // Throws proctex::Error for an unknown component or when no weighted component is left.
+  double similarity_without(std::span<const float> a, std::span<const float> b, std::string_view left_out) const;
   // A component's slice of a composite feature vector.
   std::span<const float> slice(std::span<const float> composite, std::size_t component) const;
 

@@ -371,9 +371,9 @@ double pixel_exact_limit(const Image& target) { return limit_for(target, kPixelE
 
 double looks_the_same_limit(const Image& target) { return limit_for(target, kLooksTheSameRmse); }
 
-std::string verdict_for(double s, double probability, bool pattern) {
+std::string verdict_for(double s, double probability, bool pattern, double pattern_similarity) {
   if ((pattern && s >= kCertainMatch) || (s >= kGoodMatch && probability >= kGoodProbability)) return "good";
-  if (s >= kApproximateMatch) return "approximate";
+  if (s >= kApproximateMatch || pattern_similarity >= kApproximateMatch) return "approximate";
   return "no-match";
 }
 
@@ -403,6 +403,7 @@ nlohmann::json MatchResult::to_json() const {
           {"catalogue", catalogue},
           {"selection_probability", probability},
           {"pattern", pattern},
+          {"pattern_similarity", pattern_similarity >= 0 ? nlohmann::json(pattern_similarity) : nlohmann::json(nullptr)},
           {"pixel_exact", pixel_exact},
           {"visibly_other", visibly_other},
           {"outclassed", outclassed},
@@ -1357,9 +1358,12 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     result.visibly_other = visibly_other(c);
     result.outclassed = outclassed;
     result.per_metric.clear();
-    if (const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric))
+    const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric);
+    if (composite)
       for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
     result.per_metric[metric.id()] = c.similarity;
+    if (composite && peakiness >= kPatternPeakiness)
+      result.pattern_similarity = composite->similarity_without(target_full.values, c.features.values, "spectrum");
   }
   result.timings["polish"] = polish_seconds;  // included in "final"
   result.timings["final"] = seconds_since(t_final);
@@ -1369,7 +1373,7 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
   // whatever its similarity: the clean-pattern rule (S >= kCertainMatch) does not make it good.
   result.verdict = result.pixel_exact ? "good"
                                       : verdict_for(result.similarity, result.probability,
-                                                    result.pattern && !result.visibly_other);
+                                                    result.pattern && !result.visibly_other, result.pattern_similarity);
   result.timings["total"] = seconds_since(t_start);
   result.timings["compile"] = ocl::Runtime::instance().build_seconds();  // included in the stages above
   nlohmann::json names = nlohmann::json::array();

@@ -85,8 +85,19 @@ inline constexpr double kSelectionWeight = 1.0;
 // The shape distance's weight in the final choice (MatchOptions::shape_weight; 0: not used).
 inline constexpr double kShapeWeight = 0.0;
 
-// "good", "approximate" or "no-match". `pattern`: the target is a clean pattern (see MatchResult).
-std::string verdict_for(double similarity, double probability, bool pattern);
+// On a clean pattern the spectrum component rates a result as unrelated as soon as its peaks sit
+// a few frequency bins off the target's: 43 wavy stripes answered with the same 43 stripes turned
+// 12 degrees and a faster wave - the same kind of pattern to a person - had S_spectrum 0.007 and S
+// 0.12. So on a clean pattern "no-match" also needs the similarity without the spectrum
+// (CompositeMetric::similarity_without; MatchResult::pattern_similarity) below kApproximateMatch.
+// Measured (docs/match-evaluation.md, session 23): every clean-pattern target of the labelled sets
+// called no-match had the right shader (2 deterministic, 2 photos), all at 0.28-0.49 without the
+// spectrum; clean patterns no shader expresses (tiled pixel noise, tiled random blocks) stay at
+// 0.06-0.14.
+// "good", "approximate" or "no-match". `pattern`: the target is a clean pattern (see MatchResult)
+// and the result is not visibly another image; `pattern_similarity`: the similarity without the
+// spectrum on a clean pattern (below 0: not a clean pattern).
+std::string verdict_for(double similarity, double probability, bool pattern, double pattern_similarity = -1.0);
 
 // Candidate shaders screened by default: the structural scan of the catalogue (full-resolution
 // features, no rendering) puts the right shader among its first few; screening costs renders.
@@ -145,6 +156,7 @@ struct MatchResult {
   double similarity = 0.0;                  // default metric at `resolution`
   double probability = 0.0;                 // selection probability of the matched shader
   bool pattern = false;                     // the target is a clean pattern (peaky spectrum)
+  double pattern_similarity = -1.0;         // clean pattern: the similarity without the spectrum (-1: not one)
   std::map<std::string, double> per_metric;  // components of the default metric
   std::string verdict;
   double image_rmse = -1;                   // deterministic polish: registered RGB RMSE (-1: not measured)

@@ -29,15 +29,7 @@ std::vector<TargetView> target_views(const Image& photo, int resolution) {
 double structural_similarity(const metrics::Metric& metric, const metrics::Features& a, std::span<const float> b) {
   const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric);
   if (!composite) return metric.similarity(a.values, b);
-  const auto& components = composite->components();
-  double log_s = 0.0, weight = 0.0;
-  for (size_t k = 0; k < components.size(); ++k) {
-    const auto& c = components[k];
-    if (c.metric->id() == "colour" || c.weight <= 0) continue;
-    log_s += c.weight * std::log(std::max(c.metric->similarity(composite->slice(a.values, k), composite->slice(b, k)), 1e-300));
-    weight += c.weight;
-  }
-  return weight > 0 ? std::exp(log_s / weight) : metric.similarity(a.values, b);
+  return composite->similarity_without(a.values, b, "colour");
 }
 
 std::vector<double> colour_statistics(const Image& photo) {

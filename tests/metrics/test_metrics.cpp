@@ -312,6 +312,26 @@ TEST(Metrics, CompositeBreakdownMatchesComponents) {
   for (size_t i = 0; i < parts.size(); ++i) EXPECT_EQ(parts_default[i], parts[i]);
 }
 
+// Leaving one component out renormalises the others' weights: S' = prod_{k != out} S_k^{w_k / (1 - w_out)}.
+TEST(Metrics, CompositeSimilarityWithoutOneComponent) {
+  const auto& composite = dynamic_cast<const CompositeMetric&>(default_metric());
+  const Image a = crop_a("brick.png"), b = crop_b("grass.png");
+  Features fa = composite.features(a), fb = composite.features(b);
+  const auto parts = composite.breakdown(fa.values, fb.values);
+  for (size_t out = 0; out < parts.size(); ++out) {
+    double log_s = 0, weight = 0;
+    for (size_t i = 0; i < parts.size(); ++i) {
+      if (i == out) continue;
+      log_s += composite.components()[i].weight * std::log(parts[i].second);
+      weight += composite.components()[i].weight;
+    }
+    EXPECT_NEAR(composite.similarity_without(fa.values, fb.values, parts[out].first), std::exp(log_s / weight), 1e-9)
+        << parts[out].first;
+  }
+  EXPECT_NEAR(composite.similarity_without(fa.values, fa.values, "spectrum"), 1.0, 1e-12);
+  EXPECT_THROW(composite.similarity_without(fa.values, fb.values, "no-such-component"), proctex::Error);
+}
+
 class GroupedForm : public ::testing::TestWithParam<const char*> {};
 INSTANTIATE_TEST_SUITE_P(Metrics, GroupedForm, ::testing::Values("grouped", "layout"));
 
