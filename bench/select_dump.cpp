@@ -24,6 +24,7 @@
 // --match-json DIR: the targets of bench_match_eval --pictures JSONs in DIR (each file's
 // target.spec rendered as bench_match_eval does, 256 px) as rows of split "match", accepted = the
 // target's shader, "file" = the JSON's name: the selection of a new model on those targets.
+// DIR/evidence.json "db": the catalogue (absolute path).
 // The fit of the selection weights reads these files (bench/fit_selection.py).
 #include <fmt/format.h>
 
@@ -122,6 +123,7 @@ int main(int argc, char** argv) {
     const auto* composite = dynamic_cast<const metrics::CompositeMetric*>(&metric);
     std::vector<catalog::ShaderCatalogue> cats;
     nlohmann::json index;
+    index["db"] = fs::absolute(db).string();  // fit_selection.py --train-dump reads the catalogue rows from it
     for (const auto& s : store.shaders()) {
       cats.push_back(store.load(s.name, false));
       index["shaders"].push_back({{"name", s.name}, {"samples", cats.back().samples.size()}});
