@@ -90,8 +90,13 @@ def series_group(photo, labels):
 
 
 class Data:
-    def __init__(self, folder, db, shape=False):
-        con = sqlite3.connect(db)
+    def __init__(self, folder, db, shape=False, train_dump=None):
+        # train_dump (--train-dump): the catalogue rows (what each shader can look like) come from
+        # another dump's catalogue - e.g. more samples per shader - while the photos, the synthetic
+        # rows and the nearest-sample evidence stay those of `folder` and `db` (the catalogue a
+        # match runs with).
+        train_db = json.load(open(os.path.join(train_dump, "evidence.json")))["db"] if train_dump else db
+        con = sqlite3.connect(train_db)
         meta = con.execute("select distinct metric, metric_version, resolution from shaders").fetchall()
         if len(meta) != 1:
             sys.exit("catalogue mixes metric versions: %s" % meta)
@@ -99,6 +104,11 @@ class Data:
         rows = con.execute("select s.name, f.vector from features f join shaders s on s.id = f.shader_id "
                            "order by s.name, f.idx").fetchall()
         self.names = sorted({r[0] for r in rows})
+        if train_dump:
+            own = sorted({r[0] for r in sqlite3.connect(db).execute("select name from shaders").fetchall()})
+            if own != self.names:
+                sys.exit("--train-dump's catalogue has other shaders than --db")
+            print("catalogue rows from %s (%d samples)" % (train_db, len(rows)))
         X = np.array([np.frombuffer(r[1], dtype="<f4") for r in rows], dtype=np.float64)
         self.y = np.array([self.names.index(r[0]) for r in rows])
         index = json.load(open(os.path.join(folder, "evidence.json")))
@@ -122,7 +132,10 @@ class Data:
             K = index.get("shape_size", 0)
             if not K or index.get("shape_shaders") != self.names:
                 sys.exit("the dump has no shape statistics for this catalogue (bench_select_dump of session 11 or later)")
-            XS = np.fromfile(os.path.join(folder, "catalog_shape.f32"), dtype="<f4").reshape(-1, K).astype(np.float64)
+            shape_index = json.load(open(os.path.join(train_dump, "evidence.json"))) if train_dump else index
+            if shape_index.get("shape_shaders") != self.names:
+                sys.exit("--train-dump has no shape statistics for its catalogue")
+            XS = np.fromfile(os.path.join(train_dump or folder, "catalog_shape.f32"), dtype="<f4").reshape(-1, K).astype(np.float64)
             TS = np.fromfile(os.path.join(folder, "shape.f32"), dtype="<f4").reshape(-1, K).astype(np.float64)
             if len(XS) != len(X) or len(TS) != len(T):
                 sys.exit("shape statistics rows (%d, %d) do not match the features (%d, %d)" % (len(XS), len(TS), len(X), len(T)))
@@ -545,6 +558,9 @@ def main():
     ap.add_argument("--db", required=True, help="the catalogue the dump was made with")
     ap.add_argument("--labels", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "realset", "labels.json"),
                     help="labels of the photos (packages and paths, for the series groups)")
+    ap.add_argument("--train-dump", default="",
+                    help="take the catalogue rows (features + shape statistics) from this bench_select_dump output's "
+                         "catalogue instead of --db's (e.g. a catalogue with more samples per shader)")
     ap.add_argument("--l2", type=float, default=0.05)
     ap.add_argument("--photo-weight", type=float, default=0.5)
     ap.add_argument("--balance", action="store_true", help="class-balanced photo weights (each kind weighs the same)")
@@ -583,7 +599,7 @@ def main():
                          "matcher's selection would say of a photo it was not trained on (bench_match_eval "
                          "--selection-override)")
     args = ap.parse_args()
-    data = Data(args.folder, args.db, shape=args.shape)
+    data = Data(args.folder, args.db, shape=args.shape, train_dump=args.train_dump or None)
     data.balance = args.balance
     data.colour = args.colour
     data.colour_l2 = args.colour_l2
