@@ -12,6 +12,24 @@ function setSimilarity(s, verdict) {
   v.className = "verdict " + (verdict || "");
 }
 
+// Why the verdict says what it says (search/match.h, docs/search.md "Verdict"), in the words of the
+// command line's summary.
+function verdictReason(r) {
+  const pct = p => Math.round(100 * p) + "%";
+  if (r.pixel_exact)
+    return "good: the pattern is reproduced pixel for pixel (RGB RMS difference " + r.image_rmse.toFixed(4) + ")";
+  if (r.verdict === "good")
+    return "good: " + (r.pattern ? "a clean pattern matched with similarity " + r.similarity.toFixed(2)
+                                 : "similar, and " + r.spec.shader + " is " + pct(r.selection_probability) + " likely");
+  if (r.verdict === "approximate" && r.similarity < r.thresholds.approximate && r.pattern_similarity != null)
+    return "approximate: the same kind of pattern, " + r.pattern_similarity.toFixed(2) +
+           " without the spectrum, whose peaks sit elsewhere";
+  if (r.verdict === "approximate")
+    return "approximate: the material is uncertain (" + r.spec.shader + " at " + pct(r.selection_probability) +
+           "); compare the pictures, or try another shader from the command line with --shaders";
+  return "no-match: no shader of the library reproduces this photo; try Synth to make more of it from the photo itself";
+}
+
 async function start(file) {
   showError($("error"));
   if (source) source.close();
@@ -22,6 +40,7 @@ async function start(file) {
   $("drop").appendChild(img);
   $("preview").removeAttribute("src");
   setSimilarity(0);
+  $("verdict-why").textContent = "";
   $("stage").textContent = "uploading…";
   const form = new FormData();
   form.append("photo", file);
@@ -65,6 +84,7 @@ async function finished(status) {
   const r = status.result;
   spec = r.spec;
   setSimilarity(r.similarity, r.verdict);
+  $("verdict-why").textContent = verdictReason(r);
   $("stage").textContent = (status.state === "cancelled" ? "stopped · best so far: " : "done · ") + r.spec.shader + " · " +
     r.evaluations + " renders in " + r.timings.total.toFixed(1) + " s";
   const files = "/api/jobs/" + status.id + "/files/";

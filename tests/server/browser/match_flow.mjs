@@ -60,6 +60,8 @@ try {
   const verdict = await page.$eval("#verdict", e => e.textContent);
   check(similarity > 0 && similarity <= 1, "the result shows a similarity: " + similarity);
   check(["good", "approximate", "no-match"].includes(verdict), "the result shows a verdict: " + verdict);
+  const why = await page.$eval("#verdict-why", e => e.textContent);
+  check(why.startsWith(verdict + ": "), "the verdict says why: " + why);
   const sliders = await page.$$("#params input[type=range]");
   check(sliders.length > 0, "the result's parameters are sliders (" + sliders.length + ")");
 
