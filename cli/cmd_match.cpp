@@ -52,6 +52,11 @@ double shown(double similarity, int digits) {
   return std::floor(similarity * scale) / scale;
 }
 
+// "approximate" only because a clean pattern is close without the spectrum (search/match.h verdict_for).
+bool approximate_by_pattern(const search::MatchResult& r) {
+  return r.verdict == "approximate" && r.similarity < search::kApproximateMatch;
+}
+
 // What the user can do next, by verdict: the summary's last line.
 std::string next_step(const search::MatchResult& r, const std::string& photo) {
   std::string others;
@@ -65,14 +70,18 @@ std::string next_step(const search::MatchResult& r, const std::string& photo) {
   if (r.verdict == "good")
     return fmt::format("next: render it at any size: proctex render SPEC.json -o big.png --size 4096 "
                        "(the material is {:.0f}% likely by the selection)", 100 * r.probability);
-  if (r.verdict == "approximate" && r.similarity < search::kApproximateMatch)
+  if (approximate_by_pattern(r))
     return fmt::format("next: {} draws the same kind of pattern with its details off (compare with --compare side.png); "
                        "pin what you can read off the photo with --fix name=value (proctex shaders show {}) and match again",
                        r.spec.shader, r.spec.shader);
   if (r.verdict == "approximate")
-    return fmt::format("next: the material is uncertain ({} at {:.0f}%); compare with --compare side.png, try the "
-                       "other likely materials with --shaders {}, or crop a clean region with --crop x,y,w,h",
-                       r.spec.shader, 100 * r.probability, others.empty() ? r.spec.shader : others);
+    return fmt::format("next: {} ({} at {:.0f}% by the selection, which calls a photo good only at {:.0f}%); compare "
+                       "with --compare side.png, try the other likely materials with --shaders {}, or crop a clean "
+                       "region with --crop x,y,w,h",
+                       r.similarity < search::kGoodMatch ? "not as similar as another crop of one texture would be"
+                                                         : "similar, but the material is not certain enough",
+                       r.spec.shader, 100 * r.probability, 100 * search::kGoodProbability,
+                       others.empty() ? r.spec.shader : others);
   return "next: no shader of the library reproduces " + photo +
          "; synthesise more of it from the photo itself (exemplar synthesis), or crop a region with one material";
 }
@@ -171,7 +180,7 @@ void run(const MatchCliOptions& o, const GlobalOptions& global) {
   if (result.pixel_exact)
     std::printf("%s: %s (%s: pixel-exact, RGB RMS difference %.4f; statistical similarity %.3f)\n", o.photo.c_str(),
                 result.spec.shader.c_str(), result.verdict.c_str(), result.image_rmse, shown(result.similarity, 3));
-  else if (result.verdict == "approximate" && result.similarity < search::kApproximateMatch)
+  else if (approximate_by_pattern(result))
     std::printf("%s: %s (similarity %.3f, %s: the same kind of pattern, %.3f without the spectrum, whose peaks "
                 "sit elsewhere)\n",
                 o.photo.c_str(), result.spec.shader.c_str(), shown(result.similarity, 3), result.verdict.c_str(),

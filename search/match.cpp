@@ -1362,13 +1362,13 @@ MatchResult match(const Image& target, catalog::Store& store, const MatchOptions
     if (composite)
       for (const auto& [name, value] : composite->breakdown(target_full.values, c.features.values)) result.per_metric[name] = value;
     result.per_metric[metric.id()] = c.similarity;
-    if (composite && peakiness >= kPatternPeakiness)
+    if (composite && pattern)
       result.pattern_similarity = composite->similarity_without(target_full.values, c.features.values, "spectrum");
   }
   result.timings["polish"] = polish_seconds;  // included in "final"
   result.timings["final"] = seconds_since(t_final);
   result.evaluations = evaluations;
-  result.pattern = peakiness >= kPatternPeakiness;
+  result.pattern = pattern;
   // A seed-independent result that registers visibly off the target is not an exact recovery,
   // whatever its similarity: the clean-pattern rule (S >= kCertainMatch) does not make it good.
   result.verdict = result.pixel_exact ? "good"

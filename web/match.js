@@ -25,8 +25,10 @@ function verdictReason(r) {
     return "approximate: the same kind of pattern, " + r.pattern_similarity.toFixed(2) +
            " without the spectrum, whose peaks sit elsewhere";
   if (r.verdict === "approximate")
-    return "approximate: the material is uncertain (" + r.spec.shader + " at " + pct(r.selection_probability) +
-           "); compare the pictures, or try another shader from the command line with --shaders";
+    return "approximate: " + (r.similarity < r.thresholds.good ? "not as similar as another crop of one texture would be"
+                                                               : "similar, but the material is not certain enough") +
+           " (" + r.spec.shader + " at " + pct(r.selection_probability) + " by the selection, which calls a photo good only at " +
+           pct(r.thresholds.good_probability) + "); compare the pictures, or try another shader with --shaders";
   return "no-match: no shader of the library reproduces this photo; try Synth to make more of it from the photo itself";
 }
 

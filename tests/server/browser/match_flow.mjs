@@ -76,7 +76,7 @@ try {
   const a = await move("min");
   const b = await move("max");
   check(a !== b, "moving a slider changes the render");
-  await page.screenshot({ path: path.join(outDir, "match-result.png") });
+  await page.screenshot({ path: path.join(outDir, "match-result.png"), fullPage: true });
 
   await page.goto(url.replace(/\/?$/, "/") + "library?shader=bricks", { waitUntil: "networkidle0" });
   await page.waitForFunction(() => parseInt(document.querySelector("#render").dataset.renders || "0") >= 1, { timeout: 20000 });
