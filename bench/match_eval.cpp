@@ -39,6 +39,7 @@
 #include <array>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "catalog/catalog.h"
@@ -162,13 +163,14 @@ int main(int argc, char** argv) {
   bool refine_every = false, polish_every = false, race_every = false;
   long evaluations = -1;
   uint64_t seed = 1;
+  std::set<int> only_targets;  // 1-based; empty: every target
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
       std::puts("bench_match_eval --db CATALOG [--targets N] [--seed S] [--photos DIR] [--pictures DIR] "
                 "[--markdown FILE] [--shaders a,b] [--evaluations E] [--starts K] [--candidates M] "
                 "[--screen-resolution R] [--race R] [--real LABELS [--split tune|report|all] [--real-images DIR]] "
-                "[--json FILE] [--selection-override FILE] [--threads T] [--refine-every-finalist 1] [--polish-every-finalist 1] [--race-every-lane 1]\n"
+                "[--json FILE] [--selection-override FILE] [--threads T] [--refine-every-finalist 1] [--polish-every-finalist 1] [--race-every-lane 1] [--only 7,25]\n"
                 "  --targets N      synthetic targets (default 53, or 0 with --real)\n"
                 "  --real LABELS    labelled real-texture set (bench/realset/labels.json; build the images with\n"
                 "                   python3 bench/realset/build.py): category / top-3 accuracy, wrong-but-good share\n"
@@ -178,6 +180,8 @@ int main(int argc, char** argv) {
                 "  --selection-override FILE\n"
                 "                   {photo id: {shader: probability}}: the selection's probabilities of these photos\n"
                 "                   (bench/fit_selection.py --oof-json: out-of-fold, for photos the model was trained on)\n"
+                "  --only LIST      match only these synthetic targets (1-based numbers, as the table's #); the\n"
+                "                   others are still drawn, so each target is the one of the full run\n"
                 "  --threads T      host threads of the race (default 0: one per core; 1 as before session 13)\n"
                 "  --refine-every-finalist 1\n"
                 "                   refine the finalists that cannot win too (as before session 13: same answers)\n"
@@ -211,6 +215,10 @@ int main(int argc, char** argv) {
     else if (a == "--json") json_out = v;
     else if (a == "--selection-override") override_file = v;
     else if (a == "--threads") threads = std::stoi(v);
+    else if (a == "--only") {
+      std::stringstream list(v);
+      for (std::string item; std::getline(list, item, ',');) only_targets.insert(std::stoi(item));
+    }
     else if (a == "--refine-every-finalist") refine_every = v == "1" || v == "yes";
     else if (a == "--polish-every-finalist") polish_every = v == "1" || v == "yes";
     else if (a == "--race-every-lane") race_every = v == "1" || v == "yes";
@@ -277,6 +285,7 @@ int main(int argc, char** argv) {
       unit = space.snap(unit);
       const auto packed = space.to_packed(unit);
       const uint32_t render_seed = 7000000u + i;
+      if (!only_targets.empty() && !only_targets.count(i + 1)) continue;
       RenderSettings rs;
       const Image target = renderer.render_batch(decl, {packed}, {render_seed}, rs).front();
       // Noise ceiling: the same spec with other render seeds, against the target (mean of 3).
