@@ -1,5 +1,7 @@
 #!/usr/bin/python3
-"""Compare per-photo answers of two bench_match_eval --pictures folders (JSON per photo)."""
+"""Compare per-photo answers of two bench_match_eval --pictures folders (JSON per photo).
+
+Usage: compare_match_answers.py OLD_PICTURES_DIR NEW_PICTURES_DIR"""
 import json, glob, os, sys, statistics
 a_dir, b_dir = sys.argv[1], sys.argv[2]
 same = diff = 0
@@ -24,6 +26,8 @@ for fa in sorted(glob.glob(os.path.join(a_dir, '*.json'))):
           f"renders {A['evaluations']:5d} -> {B['evaluations']:5d} unrefined {unref}  wall {sa:5.1f} -> {sb:5.1f}"
           + (f"  cpu {ev(B).get('cpu_seconds', 0):5.1f}" if 'cpu_seconds' in ev(B) else ''))
 print(f"identical {same}, differ {diff}")
+if not ta:
+    sys.exit(f"no per-photo JSON in both {a_dir} and {b_dir}: give two bench_match_eval --pictures folders")
 med = statistics.median
 print(f"median wall {med(ta):.1f} -> {med(tb):.1f} s; renders {med(ea)} -> {med(eb)}" +
       (f"; cpu {med(ca):.1f}" if ca else '') + (f" -> {med(cb):.1f}" if cb else ''))
