@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include <Eigen/Dense>
 #include <nlopt.hpp>
@@ -159,15 +160,46 @@ double colour_similarity(const ColourTarget& target, const Image& image) {
 }
 
 // Histogram matching projected on the model, from an initial ranking of the pixels.
-std::vector<double> rank_fit(const LinearModel& model, const ColourTarget& target, std::vector<float> key, bool reverse) {
+float along(const std::array<float, 3>& axis, const float* rgb) {
+  return axis[0] * rgb[0] + axis[1] * rgb[1] + axis[2] * rgb[2];
+}
+
+// Histogram matching projected on the model, from an initial ranking of the pixels, along the
+// target's sort axis `axis` (ColourTarget::axes).
+std::vector<double> rank_fit(const LinearModel& model, const ColourTarget& target, std::vector<float> key, bool reverse,
+                             size_t axis) {
   std::vector<double> colours;
   for (int iteration = 0; iteration < 4; ++iteration) {
-    colours = model.solve(assign_by_rank(order_by(key), target.sorted, reverse));
+    colours = model.solve(assign_by_rank(order_by(key), target.sorted[axis], reverse));
     const Image now = model.combine(colours);
-    for (size_t i = 0; i < key.size(); ++i) key[i] = luminance(now.pixel(0, 0) + 3 * i);
-    reverse = false;  // from now on the model's own lightness orders the pixels
+    for (size_t i = 0; i < key.size(); ++i) key[i] = along(target.axes[axis], now.pixel(0, 0) + 3 * i);
+    reverse = false;  // from now on the model's own colours order the pixels
   }
   return colours;
+}
+
+// The target's principal colour axis (unit, linear RGB), or nothing when ordering the pixels
+// along it would be ordering them by luminance (correlation of the two projections above
+// kSameOrderCorrelation: a grey or one-hue target).
+constexpr double kSameOrderCorrelation = 0.98;
+std::optional<std::array<float, 3>> principal_colour_axis(const Image& rgb) {
+  const size_t n = rgb.pixels.size() / 3;
+  if (n < 2) return std::nullopt;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < n; ++i) mean += Eigen::Vector3d(rgb.pixels[3 * i], rgb.pixels[3 * i + 1], rgb.pixels[3 * i + 2]);
+  mean /= double(n);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = Eigen::Vector3d(rgb.pixels[3 * i], rgb.pixels[3 * i + 1], rgb.pixels[3 * i + 2]) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov);
+  const Eigen::Vector3d axis = eigen.eigenvectors().col(2);  // largest eigenvalue last
+  const Eigen::Vector3d lum(0.2126, 0.7152, 0.0722);
+  // Correlation of the projections: (a' C l) / sqrt(a' C a * l' C l).
+  const double cross = axis.dot(cov * lum), va = axis.dot(cov * axis), vl = lum.dot(cov * lum);
+  if (!(va > 0.0 && vl > 0.0) || std::fabs(cross) / std::sqrt(va * vl) > kSameOrderCorrelation) return std::nullopt;
+  return std::array<float, 3>{float(axis[0]), float(axis[1]), float(axis[2])};
 }
 
 struct PolishContext {
@@ -227,11 +259,15 @@ ColourTarget make_colour_target(const Image& image, int resolution) {
   t.resolution = resolution;
   t.rgb = resize(center_crop_square(image), resolution, resolution);
   const size_t n = t.rgb.pixels.size() / 3;
-  std::vector<float> key(n);
-  for (size_t i = 0; i < n; ++i) key[i] = luminance(&t.rgb.pixels[3 * i]);
-  const auto order = order_by(key);
-  t.sorted.resize(3 * n);
-  for (size_t r = 0; r < n; ++r) std::copy_n(&t.rgb.pixels[3 * order[r]], 3, &t.sorted[3 * r]);
+  t.axes.push_back({0.2126f, 0.7152f, 0.0722f});  // luminance (image.h)
+  if (const auto axis = principal_colour_axis(t.rgb)) t.axes.push_back(*axis);
+  for (const auto& axis : t.axes) {
+    std::vector<float> key(n);
+    for (size_t i = 0; i < n; ++i) key[i] = along(axis, &t.rgb.pixels[3 * i]);
+    const auto order = order_by(key);
+    auto& sorted = t.sorted.emplace_back(3 * n);
+    for (size_t r = 0; r < n; ++r) std::copy_n(&t.rgb.pixels[3 * order[r]], 3, &sorted[3 * r]);
+  }
   t.colour_metric = &metrics::get_metric("colour");
   t.colour = t.colour_metric->features(t.rgb, resolution);
   return t;
@@ -330,18 +366,20 @@ std::vector<ColourFitResult> fit_colours(const ShaderDecl& decl, const std::vect
       results.push_back(std::move(r));
       continue;
     }
-    // Initial rankings: each colour's mask, both ways.
+    // Initial rankings: each colour's mask, both ways, along each of the target's sort axes.
     std::vector<double> best_colours = start;
     double best = r.before;
-    for (size_t j = 0; j < k; ++j) {
-      std::vector<float> key(model.pixels());
-      for (size_t i = 0; i < key.size(); ++i) key[i] = luminance(model.weights[j].pixel(0, 0) + 3 * i);
-      for (bool reverse : {false, true}) {
-        const auto fitted = rank_fit(model, target, key, reverse);
-        const double sim = colour_similarity(target, model.combine(fitted));
-        if (sim > best) {
-          best = sim;
-          best_colours = fitted;
+    for (size_t axis = 0; axis < target.axes.size(); ++axis) {
+      for (size_t j = 0; j < k; ++j) {
+        std::vector<float> key(model.pixels());
+        for (size_t i = 0; i < key.size(); ++i) key[i] = luminance(model.weights[j].pixel(0, 0) + 3 * i);
+        for (bool reverse : {false, true}) {
+          const auto fitted = rank_fit(model, target, key, reverse, axis);
+          const double sim = colour_similarity(target, model.combine(fitted));
+          if (sim > best) {
+            best = sim;
+            best_colours = fitted;
+          }
         }
       }
     }

@@ -15,6 +15,7 @@
 // the initial ranking in both directions (dark-on-light and light-on-dark), and the result with
 // the best colour similarity is kept. An optional NLopt polish then maximises the colour metric
 // on the same basis.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,7 +29,12 @@ namespace proctex::search {
 struct ColourTarget {
   int resolution = 64;
   Image rgb;                          // centre square of the target, resolution^2, linear RGB
-  std::vector<float> sorted;          // its pixels sorted by luminance, RGB triples
+  // The fit's sort axes: luminance and, when its order differs from luminance's, the target's
+  // principal colour axis (two materials of one lightness in different hues - a yellow joint
+  // between lavender pavers - interleave in lightness order, and a fit by lightness ranks
+  // averages them to grey).
+  std::vector<std::array<float, 3>> axes;
+  std::vector<std::vector<float>> sorted;  // its pixels sorted along each axis, RGB triples
   metrics::Features colour;           // its features under the "colour" metric
   const metrics::Metric* colour_metric = nullptr;
 };
