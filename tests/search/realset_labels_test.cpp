@@ -57,7 +57,7 @@ TEST(RealsetLabels, AcceptedShadersExistAndMatchTheirKind) {
 }
 
 // The report split is held out: 43 photos of the first batch, so that numbers stay comparable
-// across sessions; later additions (batches 2, 3, 4: docs/realset.md) go to tune only.
+// across sessions; later additions (batches 2-5: docs/realset.md) go to tune only.
 TEST(RealsetLabels, TheReportSplitIsTheFirstBatchsFortyThree) {
   std::map<std::string, int> report_per_kind;
   int report = 0, added = 0;
