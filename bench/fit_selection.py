@@ -90,7 +90,7 @@ def series_group(photo, labels):
 
 
 class Data:
-    def __init__(self, folder, db, shape=False, train_dump=None):
+    def __init__(self, folder, db, shape=False, train_dump=None, micro=False):
         # train_dump (--train-dump): the catalogue rows (what each shader can look like) come from
         # another dump's catalogue - e.g. more samples per shader - while the photos, the synthetic
         # rows and the nearest-sample evidence stay those of `folder` and `db` (the catalogue a
@@ -125,6 +125,7 @@ class Data:
         self.Z = (Xs - self.mean) / self.scale
         self.TZ = (T[:, self.use] - self.mean) / self.scale
         self.shape_features = 0
+        self.micro_features = 0
         if shape:
             # --shape: search::shape_statistics of every sample (catalog_shape.f32, shader-name order =
             # the rows above) and of every view (shape.f32, the rows of targets.f32), appended to the
@@ -139,11 +140,21 @@ class Data:
             TS = np.fromfile(os.path.join(folder, "shape.f32"), dtype="<f4").reshape(-1, K).astype(np.float64)
             if len(XS) != len(X) or len(TS) != len(T):
                 sys.exit("shape statistics rows (%d, %d) do not match the features (%d, %d)" % (len(XS), len(TS), len(X), len(T)))
+            # bench_select_dump --micro: the last micro_size columns are search::micro_statistics
+            # (local binary patterns); used with --micro, dropped without (the same rows as before).
+            M = index.get("micro_size", 0)
+            if micro and (not M or shape_index.get("micro_size", 0) != M):
+                sys.exit("--micro needs bench_select_dump --micro dumps (and --train-dump with them)")
+            if not micro and shape_index.get("micro_size", 0):
+                XS = XS[:, :K - shape_index["micro_size"]]
+            if not micro and M:
+                TS = TS[:, :K - M]
+            self.micro_features = M if micro else 0
             smean, sscale = XS.mean(axis=0), XS.std(axis=0) + 1e-6
             self.Z = np.hstack([self.Z, (XS - smean) / sscale])
             self.TZ = np.hstack([self.TZ, (TS - smean) / sscale])
             self.mean, self.scale = np.concatenate([self.mean, smean]), np.concatenate([self.scale, sscale])
-            self.shape_features = K
+            self.shape_features = XS.shape[1] - self.micro_features
         # --augment rows of bench_select_dump: photo-like renders of the samples, labelled by shader.
         aug_path = os.path.join(folder, "augmented.f32")
         if os.path.exists(aug_path) and index.get("augmented"):
@@ -516,8 +527,10 @@ def write_header(path, data, model, version, p_good, argv, report):
         "inline constexpr int kResolution = %d;" % data.resolution,
         "// Feature index ranges [begin, end) used, in order.",
         "inline constexpr std::size_t kRanges[][2] = {%s};" % ranges,
-        "// The last kShapeFeatures of the features are search::shape_statistics of the view.",
+        "// After the metric's features: kShapeFeatures search::shape_statistics of the view, then",
+        "// kMicroFeatures search::micro_statistics (none before v9).",
         "inline constexpr std::size_t kShapeFeatures = %d;" % data.shape_features,
+        "inline constexpr std::size_t kMicroFeatures = %d;" % data.micro_features,
         "inline constexpr std::size_t kFeatures = %d;" % W.shape[0],
         "inline constexpr std::size_t kShaders = %d;" % W.shape[1],
         "inline constexpr const char* kShaderNames[kShaders] = {",
@@ -566,6 +579,9 @@ def main():
     ap.add_argument("--balance", action="store_true", help="class-balanced photo weights (each kind weighs the same)")
     ap.add_argument("--shape", action="store_true",
                     help="add the orientation and elongation statistics (search::shape_statistics) to the structural features")
+    ap.add_argument("--micro", action="store_true",
+                    help="with --shape: add the local binary pattern statistics (search::micro_statistics; "
+                         "bench_select_dump --micro dumps)")
     ap.add_argument("--colour", action="store_true", help="fit the colour term (see above)")
     ap.add_argument("--colour-l2", type=float, default=0.05, help="L2 penalty of the colour weights")
     ap.add_argument("--grey-weight", type=float, default=0.0,
@@ -599,7 +615,7 @@ def main():
                          "matcher's selection would say of a photo it was not trained on (bench_match_eval "
                          "--selection-override)")
     args = ap.parse_args()
-    data = Data(args.folder, args.db, shape=args.shape, train_dump=args.train_dump or None)
+    data = Data(args.folder, args.db, shape=args.shape, train_dump=args.train_dump or None, micro=args.micro)
     data.balance = args.balance
     data.colour = args.colour
     data.colour_l2 = args.colour_l2

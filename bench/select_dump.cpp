@@ -24,6 +24,8 @@
 // --match-json DIR: the targets of bench_match_eval --pictures JSONs in DIR (each file's
 // target.spec rendered as bench_match_eval does, 256 px) as rows of split "match", accepted = the
 // target's shader, "file" = the JSON's name: the selection of a new model on those targets.
+// --micro: each shape row also holds search::micro_statistics (local binary patterns) after the
+// shape statistics: shape_size = kShapeStatistics + kMicroStatistics, "micro_size" the latter.
 // DIR/evidence.json "db": the catalogue (absolute path).
 // The fit of the selection weights reads these files (bench/fit_selection.py).
 #include <fmt/format.h>
@@ -92,16 +94,17 @@ Image greyscale(const Image& photo) {
 
 int main(int argc, char** argv) {
   std::string db, list, out, synthetic, match_json;
-  bool grey = false;
+  bool grey = false, micro = false;
   int augment = 0;
   unsigned augment_seed = 1;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == "--grey") {
-      grey = true;
-      for (int j = i; j + 1 < argc; ++j) argv[j] = argv[j + 1];
-      --argc;
-      break;
-    }
+  for (const char* flag : {"--grey", "--micro"})
+    for (int i = 1; i < argc; ++i)
+      if (std::string(argv[i]) == flag) {
+        (std::string(flag) == "--grey" ? grey : micro) = true;
+        for (int j = i; j + 1 < argc; ++j) argv[j] = argv[j + 1];
+        --argc;
+        break;
+      }
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--db") db = argv[i + 1];
@@ -140,6 +143,15 @@ int main(int argc, char** argv) {
         file.write(reinterpret_cast<const char*>(&f), sizeof f);
       }
     };
+    // One shape row: the shape statistics, with --micro followed by the micro statistics.
+    auto shape_row = [micro](const Image& image) {
+      auto row = search::shape_statistics(image);
+      if (micro) {
+        const auto m = search::micro_statistics(image);
+        row.insert(row.end(), m.begin(), m.end());
+      }
+      return row;
+    };
     {
       // Every sample of the catalogue rendered again, for its shape statistics (not stored in it).
       std::ofstream catalog_shape(fs::path(out) / "catalog_shape.f32", std::ios::binary);
@@ -158,7 +170,7 @@ int main(int argc, char** argv) {
           seeds.push_back(sample.seed);
         }
         for (const auto& image : renderer.render_batch(decl, packed, seeds, RenderSettings{}))
-          write_floats(catalog_shape, search::shape_statistics(image));
+          write_floats(catalog_shape, shape_row(image));
         index["shape_shaders"].push_back(cat->shader);
         std::fprintf(stderr, "\rcatalogue shape statistics %zu/%zu shaders", ++done, by_name.size());
       }
@@ -202,7 +214,7 @@ int main(int argc, char** argv) {
       write_colour(search::colour_statistics(photo));
       for (const auto& view : views) {
         write_target(metric.features(view.image, 256));
-        write_floats(shape, search::shape_statistics(view.image));
+        write_floats(shape, shape_row(view.image));
         entry["views"].push_back(view.name);
       }
       index["photos"].push_back(entry);
@@ -243,7 +255,7 @@ int main(int argc, char** argv) {
           const Image image =
               renderer.render_batch(decl, {cat2.samples[k].packed}, {cat2.samples[k].seed}, RenderSettings{}).front();
           write_colour(search::colour_statistics(image));
-          write_floats(shape, search::shape_statistics(image));
+          write_floats(shape, shape_row(image));
           write_target(f);
           index["photos"].push_back({{"path", s.name + "#" + std::to_string(k)}, {"accepted", s.name},
                                      {"split", "synthetic"}, {"kind", s.name}, {"scales", 1}, {"views", {"whole"}}});
@@ -286,7 +298,8 @@ int main(int argc, char** argv) {
     }
     index["feature_size"] = metric.feature_size();
     index["colour_size"] = search::kColourStatistics;
-    index["shape_size"] = search::kShapeStatistics;
+    index["shape_size"] = search::kShapeStatistics + (micro ? search::kMicroStatistics : 0);
+    index["micro_size"] = micro ? search::kMicroStatistics : 0;
     std::ofstream(fs::path(out) / "evidence.json") << index.dump(1);
     std::fprintf(stderr, "\n");
   } catch (const Error& e) {

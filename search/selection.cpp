@@ -83,7 +83,7 @@ double shape_distance(const std::vector<double>& a, const std::vector<double>& b
     throw Error("shape statistics of different lengths", "an internal error: report it");
   // The model's last kShapeStatistics features are the shape statistics (v6 and later); without
   // them the raw values count alike.
-  const size_t first = model::kFeatures - model::kShapeFeatures;
+  const size_t first = model::kFeatures - model::kShapeFeatures - model::kMicroFeatures;
   double sum = 0;
   for (size_t i = 0; i < kShapeStatistics; ++i) {
     const double scale = model::kShapeFeatures > 0 ? double(model::kScale[first + i]) : 1.0;
@@ -109,12 +109,18 @@ SelectionTarget::SelectionTarget(const Image& photo, const metrics::Metric& metr
     size_t at = 0;
     for (const auto& range : model::kRanges)
       for (size_t i = range[0]; i < range[1]; ++i, ++at) z[at] = (f.values.at(i) - model::kMean[at]) / model::kScale[at];
-    // The model's last kShapeFeatures features are the view's shape statistics (none before v6).
+    // Then the view's shape statistics (none before v6) and its micro-structure (none before v9).
     static_assert(model::kShapeFeatures == 0 || model::kShapeFeatures == kShapeStatistics,
                   "selection model and shape_statistics disagree");
+    static_assert(model::kMicroFeatures == 0 || model::kMicroFeatures == kMicroStatistics,
+                  "selection model and micro_statistics disagree");
     if (model::kShapeFeatures > 0) {
       const auto shape = shape_statistics(view.image, model::kResolution);
       for (size_t i = 0; i < model::kShapeFeatures; ++i, ++at) z[at] = (shape[i] - model::kMean[at]) / model::kScale[at];
+    }
+    if (model::kMicroFeatures > 0) {
+      const auto micro = micro_statistics(view.image, model::kResolution);
+      for (size_t i = 0; i < model::kMicroFeatures; ++i, ++at) z[at] = (micro[i] - model::kMean[at]) / model::kScale[at];
     }
     for (size_t k = 0; k < model::kShaders; ++k) {
       double logit = model::kBias[k];

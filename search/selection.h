@@ -61,6 +61,15 @@ inline constexpr int kShapeLevels = 4;
 inline constexpr std::size_t kShapeStatisticsPerLevel = 9;
 inline constexpr std::size_t kShapeStatistics = kShapeLevels * kShapeStatisticsPerLevel;
 std::vector<double> shape_statistics(const Image& view, int resolution = 256);
+// Micro-structure of a view's lightness: rotation-invariant uniform local binary patterns (spots,
+// flat areas, edges, line ends, corners; Ojala et al. 2002) with 8 neighbours at radius 1 and 16
+// at radius 2, at kMicroLevels pyramid levels of the view resized to `resolution`: the square
+// roots of the label shares (10 + 18 per level). Invariant to rotation, contrast and brightness.
+// Used by selection models that were fitted with them (selection_model::kMicroFeatures > 0).
+inline constexpr int kMicroLevels = 3;
+inline constexpr std::size_t kMicroStatisticsPerLevel = 10 + 18;
+inline constexpr std::size_t kMicroStatistics = kMicroLevels * kMicroStatisticsPerLevel;
+std::vector<double> micro_statistics(const Image& view, int resolution = 256);
 // How differently two images are shaped: the RMS difference of their shape statistics, each in
 // units of its spread over the selection model's training rows (its standardisation). Not
 // optimised by the refinement, so a look-alike that games the similarity is not tuned to it.

@@ -14,8 +14,10 @@ inline constexpr int kMetricVersion = 106;
 inline constexpr int kResolution = 256;
 // Feature index ranges [begin, end) used, in order.
 inline constexpr std::size_t kRanges[][2] = {{0, 190}, {226, 417}};
-// The last kShapeFeatures of the features are search::shape_statistics of the view.
+// After the metric's features: kShapeFeatures search::shape_statistics of the view, then
+// kMicroFeatures search::micro_statistics (none before v9).
 inline constexpr std::size_t kShapeFeatures = 36;
+inline constexpr std::size_t kMicroFeatures = 0;
 inline constexpr std::size_t kFeatures = 417;
 inline constexpr std::size_t kShaders = 53;
 inline constexpr const char* kShaderNames[kShaders] = {

@@ -118,23 +118,81 @@ void level_statistics(const Plane& level, std::vector<double>& out) {
   out.push_back(ratio(polarity, polarity_den));
 }
 
-}  // namespace
-
-std::vector<double> shape_statistics(const Image& view, int resolution) {
+// The view's lightness (CIE L*/100) at `resolution` x `resolution`: perceptual, so dark and
+// bright structure weigh alike.
+Plane lightness_plane(const Image& view, int resolution) {
   const Image square = view.width == resolution && view.height == resolution
                            ? view
                            : resize(center_crop_square(view), resolution, resolution);
   Plane level{resolution, resolution, {}};
   level.v.resize(static_cast<size_t>(resolution) * resolution);
   for (size_t i = 0; i < level.v.size(); ++i) {
-    // lightness (CIE L*/100) of the pixel: perceptual, so dark and bright structure weigh alike
     const double y = std::max(0.0f, luminance(square.pixels.data() + 3 * i));
     level.v[i] = static_cast<float>(y > 216.0 / 24389.0 ? 1.16 * std::cbrt(y) - 0.16 : y * 24389.0 / 2700.0);
   }
+  return level;
+}
+
+// Rotation-invariant uniform local binary patterns of one level (Ojala, Pietikainen and Maenpaa
+// 2002, "riu2"): P neighbours on a circle of radius R (bilinear), each compared with the centre;
+// a circular bit string with at most two 0/1 transitions (a spot, a flat area, an edge, a line
+// end, a corner) is labelled by its number of ones (0..P), any other by P + 1. Appends the square
+// roots of the P + 2 label shares (the roots give the rare labels weight).
+void binary_pattern_histogram(const Plane& level, int points, float radius, std::vector<double>& out) {
+  // Differences below this (a tenth of an L* unit) count as equal: a float render's flat area
+  // and an 8-bit photo's must give the same labels.
+  constexpr float kEqual = 0.001f;
+  std::vector<double> histogram(points + 2, 0.0);
+  std::vector<float> dx(points), dy(points);
+  for (int p = 0; p < points; ++p) {
+    const double angle = 2.0 * M_PI * p / points;
+    dx[p] = static_cast<float>(radius * std::cos(angle));
+    dy[p] = static_cast<float>(-radius * std::sin(angle));
+  }
+  const int margin = static_cast<int>(std::ceil(radius)) + 1;
+  std::vector<int> bits(points);
+  for (int y = margin; y < level.h - margin; ++y)
+    for (int x = margin; x < level.w - margin; ++x) {
+      const float centre = level.at(x, y);
+      for (int p = 0; p < points; ++p) {
+        const float sx = x + dx[p], sy = y + dy[p];
+        const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
+        const float fx = sx - x0, fy = sy - y0;
+        const float v = (1 - fy) * ((1 - fx) * level.at(x0, y0) + fx * level.at(x0 + 1, y0)) +
+                        fy * ((1 - fx) * level.at(x0, y0 + 1) + fx * level.at(x0 + 1, y0 + 1));
+        bits[p] = v - centre > -kEqual ? 1 : 0;
+      }
+      int ones = 0, transitions = 0;
+      for (int p = 0; p < points; ++p) {
+        ones += bits[p];
+        transitions += bits[p] != bits[(p + 1) % points];
+      }
+      histogram[transitions <= 2 ? ones : points + 1] += 1.0;
+    }
+  double total = 0;
+  for (double h : histogram) total += h;
+  for (double h : histogram) out.push_back(total > 0 ? std::sqrt(h / total) : 0.0);
+}
+
+}  // namespace
+
+std::vector<double> shape_statistics(const Image& view, int resolution) {
+  Plane level = lightness_plane(view, resolution);
   std::vector<double> out;
   for (int l = 0; l < kShapeLevels; ++l) {
     level_statistics(level, out);
     if (l + 1 < kShapeLevels) level = halved(level);
+  }
+  return out;
+}
+
+std::vector<double> micro_statistics(const Image& view, int resolution) {
+  Plane level = lightness_plane(view, resolution);
+  std::vector<double> out;
+  for (int l = 0; l < kMicroLevels; ++l) {
+    binary_pattern_histogram(level, 8, 1.0f, out);
+    binary_pattern_histogram(level, 16, 2.0f, out);
+    if (l + 1 < kMicroLevels) level = halved(level);
   }
   return out;
 }

@@ -147,5 +147,50 @@ TEST(Selection, ShapeStatisticsSeeTwoPerpendicularDirectionsOfAGrid) {
   EXPECT_GT(g[8], 0.2);  // dark lines on a bright ground: valleys (positive curvature across them)
 }
 
+
+// Micro statistics (search::micro_statistics): per level, the square roots of the shares of the
+// rotation-invariant uniform LBP labels, 10 for 8 neighbours at radius 1 (label k: k neighbours
+// not darker than the centre, 9: not uniform) then 18 for 16 at radius 2.
+constexpr size_t kMicroPer = kMicroStatisticsPerLevel;
+
+TEST(Selection, MicroStatisticsLabelAFlatAreaAndIsolatedSpots) {
+  const auto flat = micro_statistics(from_lightness(256, [](float, float) { return 0.4f; }));
+  ASSERT_EQ(flat.size(), kMicroStatistics);
+  for (int l = 0; l < kMicroLevels; ++l) {
+    EXPECT_NEAR(flat[l * kMicroPer + 8], 1.0, 1e-9) << "level " << l;        // all neighbours equal
+    EXPECT_NEAR(flat[l * kMicroPer + 10 + 16], 1.0, 1e-9) << "level " << l;  // the same at radius 2
+  }
+  // single bright pixels 8 px apart on a dark ground: each is a spot (label 0) at the finest level
+  const auto spots = micro_statistics(from_lightness(256, [](float x, float y) {
+    return static_cast<int>(x) % 8 == 4 && static_cast<int>(y) % 8 == 4 ? 0.9f : 0.1f;
+  }));
+  EXPECT_NEAR(spots[0] * spots[0], 1.0 / 64.0, 0.002);
+}
+
+TEST(Selection, MicroStatisticsDoNotDependOnRotationOrContrast) {
+  const Image noise = isotropic_noise(5);
+  Image turned = noise;  // a quarter turn
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x)
+      for (int c = 0; c < 3; ++c) turned.pixel(x, y)[c] = noise.pixel(y, 255 - x)[c];
+  Image faint = noise;  // half the contrast, brighter
+  for (float& v : faint.pixels) v = 0.5f * v + 0.3f;
+  const auto a = micro_statistics(noise), b = micro_statistics(turned), c = micro_statistics(faint);
+  for (size_t i = 0; i < kMicroStatistics; ++i) {
+    EXPECT_NEAR(a[i], b[i], 0.01) << "statistic " << i;
+    EXPECT_NEAR(a[i], c[i], 0.03) << "statistic " << i;
+  }
+}
+
+TEST(Selection, MicroStatisticsTellEdgesFromNoise) {
+  // smooth stripes: every neighbourhood is a uniform pattern (an edge or a flat slope)
+  const auto s = micro_statistics(stripes(30.0f, 24.0f));
+  const auto n = micro_statistics(isotropic_noise(3));
+  const double stripes_other = s[9] * s[9], noise_other = n[9] * n[9];
+  EXPECT_LT(stripes_other, 0.05) << stripes_other;
+  EXPECT_GT(noise_other, 0.1);  // 0.15 for this noise
+  EXPECT_GT(noise_other, 3 * stripes_other);
+}
+
 }  // namespace
 }  // namespace proctex::search
