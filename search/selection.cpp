@@ -81,8 +81,8 @@ std::vector<double> colour_statistics(const Image& photo) {
 double shape_distance(const std::vector<double>& a, const std::vector<double>& b) {
   if (a.size() != kShapeStatistics || b.size() != kShapeStatistics)
     throw Error("shape statistics of different lengths", "an internal error: report it");
-  // The model's last kShapeStatistics features are the shape statistics (v6 and later); without
-  // them the raw values count alike.
+  // The model's shape statistics (v6 and later) come after the metric's features and before the
+  // micro statistics (v9 and later); without them the raw values count alike.
   const size_t first = model::kFeatures - model::kShapeFeatures - model::kMicroFeatures;
   double sum = 0;
   for (size_t i = 0; i < kShapeStatistics; ++i) {
